@@ -1,0 +1,30 @@
+"""rheolin: periodic steady state and stability of rotating transmissions.
+
+Linearized equations with time-periodic ("rheo-linear") coefficients,
+``M(t) q'' + D(t) q' + K(t) q = f(t)``, solved by harmonic balance in the frequency domain.
+
+>>> import rheolin as rl
+>>> sorted(rl.METHODS)
+['direct', 'gmres', 'lti', 'perturbation']
+"""
+
+from .errors import ModelError
+from .floquet import FloquetResult, floquet
+from .harmonics import HarmonicSet
+from .solution import STATUS, Solution
+from .solvers import METHODS, solve
+from .system import PeriodicSystem
+
+__all__ = [
+    "METHODS",
+    "STATUS",
+    "FloquetResult",
+    "HarmonicSet",
+    "ModelError",
+    "PeriodicSystem",
+    "Solution",
+    "floquet",
+    "solve",
+]
+
+__version__ = "0.1.0"

@@ -1,0 +1,189 @@
+"""``solve``: one entry point over the registered methods, one result type."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Iterable
+
+import numpy as np
+
+from ..floquet import floquet
+from ..harmonics import HarmonicSet, as_harmonic_set
+from ..operator import HarmonicBalance, SingularBlockError
+from ..solution import Solution
+from ..system import PeriodicSystem
+from . import direct, krylov, lti, perturbation  # noqa: F401  (register the methods)
+from .registry import METHODS, Options, SolverOutcome
+
+__all__ = ["AUTO_STABILITY_SIZE", "solve", "stability_harmonics"]
+
+log = logging.getLogger(__name__)
+
+#: Iterative methods may land slightly above ``rtol`` when the recurrence residual and the
+#: recomputed one differ by round-off; beyond this factor the result is not a success.
+_ROUNDOFF_SLACK = 2.0
+#: A direct method's answer whose recomputed residual exceeds this is ill-conditioned.
+_DIRECT_RESIDUAL_LIMIT = 1e-6
+
+
+def solve(
+    system: PeriodicSystem,
+    harmonics: HarmonicSet | int | Iterable[int],
+    *,
+    method: str = "auto",
+    rtol: float = 1e-10,
+    maxiter: int | None = None,
+    callback: Callable[[int, float], None] | None = None,
+    workers: int | None = None,
+    stability: bool | None = None,
+) -> Solution:
+    """Periodic steady state of ``M(t) q'' + D(t) q' + K(t) q = f(t)`` by harmonic balance.
+
+    Parameters
+    ----------
+    system
+        The periodic system.
+    harmonics
+        The harmonic set: an int ``N`` (``-N..N``), an iterable of ints, or a
+        :class:`~rheolin.HarmonicSet`.
+    method
+        ``"auto"``, ``"lti"``, ``"perturbation"``, ``"gmres"`` or ``"direct"``
+        (DESIGN.md §3).
+    rtol
+        Relative residual ``||f - A q|| / ||f||`` to reach (iterative methods).
+    maxiter
+        Iteration cap (default 200 for perturbation, 500 for gmres).
+    callback
+        Called as ``callback(iteration, relative_residual)`` by iterative methods.
+    workers
+        Threads for the per-harmonic factorizations and solves (default: the cores).
+    stability
+        Check Floquet stability (Hill's method) of the operating point. ``None`` (default)
+        checks when the dense Hill problem is small enough (``2 n |H_F| <=``
+        :data:`AUTO_STABILITY_SIZE`); ``True`` always; ``False`` never. An unstable
+        operating point gives ``success=False``, ``status=4``: its periodic solution exists
+        but is not physical (DESIGN.md §6).
+
+    Returns
+    -------
+    Solution
+        ``success`` is False, with a ``message``, when the method did not converge.
+
+    Examples
+    --------
+    A Jeffcott rotor with a stiffness asymmetry, under unbalance:
+
+    >>> import numpy as np, rheolin as rl
+    >>> W = 0.5; K2 = 0.1 * np.array([[1, -1j], [-1j, -1]]) / 2
+    >>> s = rl.PeriodicSystem(W, M={0: np.eye(2)}, D={0: 0.02 * np.eye(2)},
+    ...                       K={0: np.eye(2), 2: K2}, f={1: np.array([1, -1j]) * W**2 / 2})
+    >>> sol = rl.solve(s, 5, method="gmres")
+    >>> sol.success, sol.method, bool(sol.residual < 1e-10), sol.stable
+    (True, 'gmres', True, True)
+    """
+    if not isinstance(system, PeriodicSystem):
+        raise TypeError(f"`system` must be a PeriodicSystem, got {type(system).__name__}")
+    hset = as_harmonic_set(harmonics)
+    if not (isinstance(rtol, int | float) and 0.0 < rtol < 1.0):
+        raise ValueError(f"`rtol` must be a number in (0, 1), got {rtol!r}")
+    if maxiter is not None and (isinstance(maxiter, bool) or int(maxiter) < 1):
+        raise ValueError(f"`maxiter` must be a positive integer, got {maxiter!r}")
+    allowed = ["auto", *METHODS]
+    if method not in allowed:
+        raise ValueError(f"`method` must be one of {allowed}, got {method!r}")
+    opts = Options(rtol=float(rtol), maxiter=maxiter, callback=callback)
+    op = HarmonicBalance(system, hset, workers=workers)
+    sol = _auto(op, opts) if method == "auto" else _finish(op, _run(method, op, opts), opts)
+    return _check_stability(system, sol, stability)
+
+
+#: Largest dense Hill matrix checked automatically by :func:`solve`.
+AUTO_STABILITY_SIZE = 1200
+
+
+def stability_harmonics(system: PeriodicSystem) -> HarmonicSet:
+    """Dense Hill truncation for a stability check: twice the widest coefficient harmonic + 4."""
+    kmax = max((abs(k) for k in system.coefficient_harmonics), default=0)
+    return HarmonicSet.full(2 * kmax + 4 if kmax else 0)
+
+
+def _check_stability(system: PeriodicSystem, sol: Solution, stability: bool | None) -> Solution:
+    if stability is False:
+        return sol
+    hset = stability_harmonics(system)
+    if stability is None and 2 * system.n * len(hset) > AUTO_STABILITY_SIZE:
+        sol.message += "; stability not checked (system too large for the dense Hill check)"
+        return sol
+    res = floquet(system, hset)
+    sol.stable, sol.max_floquet_real = res.stable, res.max_real
+    if not res.stable and sol.success:
+        sol.success, sol.status = False, 4
+        sol.message += (
+            f"; but the operating point is unstable (largest Floquet real part "
+            f"{res.max_real:.3g} 1/s > 0): the periodic solution is not physical"
+        )
+    return sol
+
+
+def _run(method: str, op: HarmonicBalance, opts: Options) -> SolverOutcome:
+    if op.rhs_norm == 0.0:
+        return SolverOutcome(np.zeros_like(op.rhs), True, 0, "zero load: q = 0", method)
+    try:
+        return METHODS[method](op, opts)
+    except SingularBlockError as exc:
+        return SolverOutcome(
+            np.zeros_like(op.rhs),
+            False,
+            3,
+            f"{exc}: the time-averaged system is singular at harmonic {exc.n} "
+            "(an undamped resonance); a preconditioned method cannot run",
+            method,
+        )
+
+
+def _finish(op: HarmonicBalance, out: SolverOutcome, opts: Options, note: str = "") -> Solution:
+    residual = op.relative_residual(out.Q) if out.status != 3 or out.Q.any() else float("nan")
+    success, status, message = out.converged, out.status, out.message
+    if (
+        success
+        and out.method in ("gmres", "perturbation")
+        and residual > _ROUNDOFF_SLACK * opts.rtol
+    ):
+        success, status = False, 1
+        message = f"{message}, but the recomputed residual {residual:.3g} exceeds rtol"
+    if success and out.method in ("lti", "direct") and not residual <= _DIRECT_RESIDUAL_LIMIT:
+        success, status = False, 3
+        message = f"{message}, but the residual {residual:.3g} shows an ill-conditioned system"
+    if note:
+        message = f"{note}; {message}"
+    if not success:
+        log.warning("%s: %s", out.method, message)
+    return Solution(
+        harmonics=op.full.copy(),
+        q=op.expand(out.Q),
+        omega=op.w1,
+        success=bool(success),
+        status=int(status),
+        message=message,
+        method=out.method,
+        iterations=out.iterations,
+        history=list(out.history),
+        residual=float(residual),
+        info=dict(out.info),
+    )
+
+
+def _auto(op: HarmonicBalance, opts: Options) -> Solution:
+    """``lti`` for a time-invariant system; else ``gmres``, falling back to ``direct``."""
+    if not op.system.coefficient_harmonics:
+        return _finish(op, _run("lti", op, opts), opts, "auto chose lti (time-invariant)")
+    first = _finish(op, _run("gmres", op, opts), opts, "auto chose gmres")
+    if first.success:
+        return first
+    fallback = _finish(
+        op,
+        _run("direct", op, opts),
+        opts,
+        f"auto: gmres failed ({first.message}); fell back to direct",
+    )
+    return fallback if fallback.success else first
