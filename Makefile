@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/python -m rheolin.demo
+	$(BIN)/rheolin demo
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests bench

@@ -8,6 +8,8 @@ Linearized equations with time-periodic ("rheo-linear") coefficients,
 ['direct', 'gmres', 'lti', 'perturbation']
 """
 
+import logging
+
 from .errors import ModelError
 from .floquet import FloquetResult, floquet
 from .harmonics import HarmonicSet
@@ -28,3 +30,5 @@ __all__ = [
 ]
 
 __version__ = "0.1.0"
+
+logging.getLogger(__name__).addHandler(logging.NullHandler())

@@ -25,7 +25,6 @@ def solve_perturbation(op: HarmonicBalance, opts: Options) -> SolverOutcome:
     if opts.callback:
         opts.callback(0, history[-1])
     rate = float("nan")
-    growth = 0
     for it in range(1, maxiter + 1):
         if history[-1] <= opts.rtol:
             return SolverOutcome(
@@ -37,10 +36,8 @@ def solve_perturbation(op: HarmonicBalance, opts: Options) -> SolverOutcome:
         dAq = dAq_new
         if opts.callback:
             opts.callback(it, history[-1])
-        if len(history) >= 3 and history[-2] > 0:
-            rate = history[-1] / history[-2]
-        growth = growth + 1 if history[-1] > history[-2] else 0
-        if not np.isfinite(history[-1]) or (growth >= 3 and history[-1] > history[0]):
+        rate = _contraction(history)
+        if _diverging(history):
             return SolverOutcome(
                 Q,
                 False,
@@ -67,3 +64,21 @@ def solve_perturbation(op: HarmonicBalance, opts: Options) -> SolverOutcome:
         history,
         {"contraction": rate},
     )
+
+
+def _contraction(history: list[float], window: int = 10) -> float:
+    """Geometric-mean ratio of successive residuals over the last ``window`` iterations."""
+    tail = [h for h in history[-(window + 1) :] if h > 0]
+    if len(tail) < 2:
+        return float("nan")
+    return float((tail[-1] / tail[0]) ** (1.0 / (len(tail) - 1)))
+
+
+def _diverging(history: list[float]) -> bool:
+    """Non-finite, or clearly above both the start and the best residual so far."""
+    last = history[-1]
+    if not np.isfinite(last):
+        return True
+    if len(history) < 4:
+        return False
+    return last > history[0] and last > 10.0 * min(history)
