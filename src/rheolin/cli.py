@@ -46,10 +46,10 @@ def demo(
     """Solve a small geared chain with an asymmetric rotating body by every method."""
     system = chain_with_mesh(dofs)
     hset = HarmonicSet.closure(system, order=harmonics)
+    positive = [k for k in system.coefficient_harmonics if k > 0]
     console.print(
         f"[bold]Demo system[/bold]: {system.n} DOF, base frequency {system.omega:.2f} rad/s, "
-        f"coefficient harmonics {system.coefficient_harmonics[len(system.coefficient_harmonics) // 2 :]}"
-        f" (and negatives), {len(hset)} harmonics in the closure set"
+        f"coefficient harmonics ±{positive}, {len(hset)} harmonics in the closure set"
     )
     table = Table(title="Periodic steady state by method")
     for col in ("method", "success", "iterations", "residual", "seconds", "max |q| [m]"):
