@@ -25,7 +25,7 @@ def solve_direct(op: HarmonicBalance, opts: Options) -> SolverOutcome:
             "direct",
         )
     try:
-        lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A")
+        lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A")  # partial pivoting: the reference
     except RuntimeError as exc:
         return SolverOutcome(
             np.zeros_like(op.rhs), False, 3, f"coupled matrix is singular ({exc})", "direct"

@@ -19,6 +19,7 @@ class Options:
     rtol: float = 1e-10
     maxiter: int | None = None
     callback: Callable[[int, float], None] | None = None
+    extra: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -40,12 +41,22 @@ Method = Callable[[HarmonicBalance, Options], SolverOutcome]
 #: Methods by name; ``solve(..., method=name)`` dispatches here.
 METHODS: dict[str, Method] = {}
 
+#: Methods that solve the truncated harmonic-balance system to ``rtol``: their success is
+#: also judged by the recomputed residual. Others (e.g. time integration) judge their own.
+RESIDUAL_CHECKED: set[str] = set()
 
-def register(name: str) -> Callable[[Method], Method]:
-    """Register a method under ``name``."""
+
+def register(name: str, *, residual_checked: bool = True) -> Callable[[Method], Method]:
+    """Register a method under ``name``.
+
+    ``residual_checked``: the method solves the harmonic-balance system to ``rtol``, so a
+    recomputed residual above ``rtol`` makes its result unsuccessful.
+    """
 
     def deco(fn: Method) -> Method:
         METHODS[name] = fn
+        if residual_checked:
+            RESIDUAL_CHECKED.add(name)
         return fn
 
     return deco

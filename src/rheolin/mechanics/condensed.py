@@ -1,0 +1,189 @@
+"""Imported (condensed) bodies: ``M_B, K_B`` (+ optional ``D_B``, gyroscopic ``G_B``) in body axes.
+
+The body's DOFs are node-major, 6 per node ``(u, phi)`` in body axes; ``nodes`` maps body node
+``i`` to the global node ``nodes[i]``. ``frame`` holds the body axes in global coordinates (as
+columns) at ``t = 0``. The body spins at ``W = s * w1`` about ``axis`` (global); its nodes must
+lie on the spin axis (their reference positions do not move). Contributions (DESIGN.md
+section 5)::
+
+    M += Rt M_B Rt^T,   D += Rt D_B Rt^T + W Rt G_B Rt^T,   K += Rt K_B Rt^T + Rt D_B Rt'^T
+
+``G_B`` is the gyroscopic matrix per unit spin speed about ``+axis``. Inertia terms of a
+non-axisymmetric rotary inertia beyond ``G_B`` (the ``J'`` rows of a rigid node) are not
+generated; model such inertia with :class:`~rheolin.mechanics.rigid.RigidNode`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import scipy.io
+import scipy.sparse as sp
+
+from ..errors import ModelError
+from ._term import Term
+from .rotation import add_series, circulatory_matrix, clean_series, rotate_body_matrix, unit_axis
+
+__all__ = ["CondensedBody", "load_condensed", "load_matrix"]
+
+
+def load_matrix(path: str | Path) -> np.ndarray:
+    """Dense matrix from a Matrix Market (``.mtx``) or NumPy (``.npy``) file.
+
+    >>> import tempfile, os
+    >>> p = os.path.join(tempfile.mkdtemp(), "k.mtx")
+    >>> scipy.io.mmwrite(p, np.eye(2))
+    >>> load_matrix(p)
+    array([[1., 0.], [0., 1.]])
+    """
+    p = Path(path)
+    if p.suffix == ".mtx" or p.name.endswith(".mtx.gz"):
+        a = scipy.io.mmread(str(p))
+    elif p.suffix == ".npy":
+        a = np.load(p)
+    else:
+        raise ModelError(f"`path` must be a .mtx, .mtx.gz or .npy file, got {str(p)!r}")
+    a = a.toarray() if sp.issparse(a) else np.asarray(a)
+    return np.asarray(a, dtype=float)
+
+
+@dataclass(frozen=True)
+class CondensedBody:
+    """A body given by condensed matrices in body axes.
+
+    Parameters
+    ----------
+    M, K
+        Mass and stiffness matrices (``6 n x 6 n`` for ``n`` nodes), body axes.
+    nodes
+        Global node index of each body node.
+    D
+        Rotating (material) damping matrix, or ``None``.
+    G
+        Gyroscopic matrix per unit spin speed about ``+axis``, or ``None``.
+    frame
+        3x3 rotation whose columns are the body axes in global coordinates at ``t = 0``.
+
+    Examples
+    --------
+    >>> b = CondensedBody(M=np.eye(6), K=2 * np.eye(6), nodes=[4])
+    >>> t = b.term([0, 0, 1], 1, 10.0)
+    >>> t.dofs.tolist(), sorted(t.K)
+    ([24, 25, 26, 27, 28, 29], [0])
+    """
+
+    M: np.ndarray
+    K: np.ndarray
+    nodes: Sequence[int]
+    D: np.ndarray | None = None
+    G: np.ndarray | None = None
+    frame: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        nodes = np.asarray(self.nodes)
+        if nodes.ndim != 1 or nodes.size == 0 or not np.issubdtype(nodes.dtype, np.integer):
+            raise ModelError(f"`nodes` must be a nonempty list of integers, got {self.nodes!r}")
+        if nodes.min() < 0 or len(set(nodes.tolist())) != nodes.size:
+            raise ModelError("`nodes` must be distinct nonnegative node indices")
+        n = 6 * nodes.size
+        for name in ("M", "K", "D", "G"):
+            x = getattr(self, name)
+            if x is None:
+                continue
+            x = x.toarray() if sp.issparse(x) else np.asarray(x, dtype=float)
+            if x.shape != (n, n) or not np.all(np.isfinite(x)):
+                raise ModelError(
+                    f"`{name}` must be a finite {n}x{n} matrix (6 DOFs x {nodes.size} nodes), "
+                    f"got shape {x.shape}"
+                )
+            object.__setattr__(self, name, x)
+        T = np.eye(3) if self.frame is None else np.asarray(self.frame, dtype=float)
+        if T.shape != (3, 3) or not np.allclose(T.T @ T, np.eye(3), atol=1e-10):
+            raise ModelError("`frame` must be a 3x3 rotation matrix (orthonormal columns)")
+        if np.linalg.det(T) < 0:
+            raise ModelError("`frame` must be a proper rotation (determinant +1)")
+        object.__setattr__(self, "frame", T)
+        object.__setattr__(self, "nodes", nodes.astype(np.int64))
+
+    @property
+    def dofs(self) -> np.ndarray:
+        """Global DOF indices, node-major."""
+        return (6 * np.asarray(self.nodes)[:, None] + np.arange(6)).ravel()
+
+    def _global(self, x: np.ndarray) -> np.ndarray:
+        frame = np.asarray(self.frame, dtype=float)
+        Tb: np.ndarray = np.kron(np.eye(2 * len(self.nodes)), frame)
+        return Tb @ x @ Tb.T
+
+    def term(self, axis: object, s: int, w1: float) -> Term:
+        """:class:`Term` of the body spinning at ``W = s * w1`` about ``axis``."""
+        e = unit_axis(axis)
+        W = s * float(w1)
+        M = rotate_body_matrix(self._global(self.M), e, s)
+        K = rotate_body_matrix(self._global(self.K), e, s)
+        D: dict[int, np.ndarray] = {}
+        if self.D is not None:
+            Dg = self._global(self.D)
+            D = rotate_body_matrix(Dg, e, s)
+            K = add_series(K, circulatory_matrix(Dg, e, s, w1))
+        if self.G is not None and W != 0.0:
+            D = add_series(
+                D, {k: W * v for k, v in rotate_body_matrix(self._global(self.G), e, s).items()}
+            )
+        return Term(dofs=self.dofs, M=M, D=clean_series(D) if D else {}, K=clean_series(K))
+
+
+def load_condensed(
+    path: str | Path | None = None,
+    *,
+    M: str | Path | None = None,
+    K: str | Path | None = None,
+    D: str | Path | None = None,
+    G: str | Path | None = None,
+    nodes: Sequence[int] | None = None,
+    frame: np.ndarray | None = None,
+) -> CondensedBody:
+    """Load a condensed body from one ``.npz`` (keys ``M, K`` and optionally ``D, G, nodes,
+    frame``) or from separate matrix files (``.mtx``/``.npy``) given as ``M=..., K=...``.
+
+    Arguments ``nodes`` and ``frame`` override the file's.
+
+    >>> import tempfile, os
+    >>> p = os.path.join(tempfile.mkdtemp(), "body.npz")
+    >>> np.savez(p, M=np.eye(6), K=np.eye(6), nodes=np.array([2]))
+    >>> load_condensed(p).dofs.tolist()
+    [12, 13, 14, 15, 16, 17]
+    """
+    data: dict[str, object] = {}
+    if path is not None:
+        p = Path(path)
+        if p.suffix != ".npz":
+            raise ModelError(f"`path` must be a .npz file, got {str(p)!r}")
+        with np.load(p) as z:
+            data = {k: z[k] for k in z.files}
+        unknown = set(data) - {"M", "K", "D", "G", "nodes", "frame"}
+        if unknown:
+            raise ModelError(
+                f"unknown arrays {sorted(unknown)} in {str(p)!r}; allowed: M, K, D, G, nodes, frame"
+            )
+    for name, f in (("M", M), ("K", K), ("D", D), ("G", G)):
+        if f is not None:
+            data[name] = load_matrix(f)
+    if nodes is not None:
+        data["nodes"] = np.asarray(nodes)
+    if frame is not None:
+        data["frame"] = np.asarray(frame)
+    for name in ("M", "K", "nodes"):
+        if name not in data:
+            raise ModelError(f"condensed body needs `{name}`")
+    return CondensedBody(
+        M=data["M"],  # type: ignore[arg-type]
+        K=data["K"],  # type: ignore[arg-type]
+        nodes=np.asarray(data["nodes"]).ravel().tolist(),
+        D=data.get("D"),  # type: ignore[arg-type]
+        G=data.get("G"),  # type: ignore[arg-type]
+        frame=data.get("frame"),  # type: ignore[arg-type]
+    )

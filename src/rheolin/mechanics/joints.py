@@ -1,0 +1,161 @@
+"""Joints: bearings and couplings between a node and ground or between two nodes.
+
+A joint acts on the *relative* displacement ``r = q_a - q_b`` of two nodes (``q_b = 0`` for
+ground) through a 6x6 stiffness ``K_J`` and damping ``D_J`` over ``(ux, uy, uz, phix, phiy,
+phiz)``. Its contribution to the node pair is ``[[X, -X], [-X, X]]``.
+
+* In the inertial frame (bearings, housings): constant, harmonic 0 only.
+* In the axes of a body spinning at ``W = s w1`` about ``e`` (DESIGN.md section 5):
+  ``K(t) += R K_J R^T`` and, for damping acting on the body-frame rate,
+  ``D(t) += R D_J R^T``, ``K(t) += R D_J R'^T`` with ``R = blockdiag(R(t), R(t))``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..errors import ModelError
+from ._term import Term
+from .rotation import circulatory_matrix, rotate_body_matrix
+
+__all__ = [
+    "COMPONENTS",
+    "coupling_term",
+    "expand_matrix",
+    "joint_term",
+]
+
+#: Names of the six DOFs of a node, in order.
+COMPONENTS = ("ux", "uy", "uz", "phix", "phiy", "phiz")
+
+
+def expand_matrix(
+    matrix: object, components: Sequence[str] | None = None, field: str = "stiffness"
+) -> np.ndarray:
+    """Embed a joint matrix given on some node components into a 6x6 matrix.
+
+    Parameters
+    ----------
+    matrix
+        Scalar (isotropic on ``components``), vector (diagonal) or square matrix.
+    components
+        Names from :data:`COMPONENTS` that the rows/columns refer to; default all six
+        for a 6x6 matrix.
+    field
+        Name used in error messages.
+
+    Examples
+    --------
+    Anisotropic radial bearing with cross-coupling:
+
+    >>> K = expand_matrix([[1e8, 2e7], [-2e7, 2e8]], ["ux", "uy"])
+    >>> K[:2, :2], bool(K[2:].any())
+    (array([[ 1.e+08,  2.e+07],
+           [-2.e+07,  2.e+08]]), False)
+    """
+    if components is None:
+        components = COMPONENTS
+    components = list(components)
+    bad = [c for c in components if c not in COMPONENTS]
+    if bad or len(set(components)) != len(components):
+        raise ModelError(
+            f"`components` must be distinct names from {list(COMPONENTS)}, got {components}"
+        )
+    n = len(components)
+    a = np.asarray(matrix, dtype=float)
+    if a.ndim == 0:
+        a = float(a) * np.eye(n)
+    elif a.ndim == 1:
+        if a.size != n:
+            raise ModelError(f"`{field}` has {a.size} entries but `components` has {n}")
+        a = np.diag(a)
+    if a.shape != (n, n):
+        raise ModelError(
+            f"`{field}` must be a scalar, a length-{n} vector or {n}x{n}, got {a.shape}"
+        )
+    if not np.all(np.isfinite(a)):
+        raise ModelError(f"`{field}` contains NaN or inf")
+    idx = [COMPONENTS.index(c) for c in components]
+    out = np.zeros((6, 6))
+    out[np.ix_(idx, idx)] = a
+    return out
+
+
+def _pair(
+    dofs_a: ArrayLike, dofs_b: ArrayLike | None, X: dict[int, np.ndarray]
+) -> tuple[np.ndarray, dict[int, np.ndarray]]:
+    if dofs_b is None:
+        return np.asarray(dofs_a, dtype=np.int64), X
+    dofs = np.concatenate([np.asarray(dofs_a), np.asarray(dofs_b)]).astype(np.int64)
+    return dofs, {k: np.block([[x, -x], [-x, x]]) for k, x in X.items()}
+
+
+def joint_term(
+    dofs_a: ArrayLike,
+    dofs_b: ArrayLike | None = None,
+    stiffness: np.ndarray | None = None,
+    damping: np.ndarray | None = None,
+) -> Term:
+    """A joint fixed in the inertial frame (bearing), node-to-ground or node-to-node.
+
+    Parameters
+    ----------
+    dofs_a, dofs_b
+        The six global DOFs of each node; ``dofs_b=None`` means ground.
+    stiffness, damping
+        6x6 matrices on the relative displacement ``q_a - q_b`` (see :func:`expand_matrix`).
+
+    Examples
+    --------
+    >>> K = expand_matrix(1e6, ["ux"])
+    >>> t = joint_term(range(6), range(6, 12), stiffness=K)
+    >>> t.K[0][0, [0, 6]]
+    array([ 1000000., -1000000.])
+    """
+    X = {0: np.zeros((6, 6)) if stiffness is None else np.asarray(stiffness, float)}
+    C = {0: np.zeros((6, 6)) if damping is None else np.asarray(damping, float)}
+    dofs, K = _pair(dofs_a, dofs_b, X)
+    _, D = _pair(dofs_a, dofs_b, C)
+    return Term(dofs, K=K if stiffness is not None else {}, D=D if damping is not None else {})
+
+
+def coupling_term(
+    dofs_a: ArrayLike,
+    dofs_b: ArrayLike | None,
+    stiffness: np.ndarray | None = None,
+    damping: np.ndarray | None = None,
+    spin: int = 0,
+    axis: ArrayLike = (0.0, 0.0, 1.0),
+    omega: float = 1.0,
+) -> Term:
+    """A joint whose stiffness/damping are given in the axes of a body spinning at ``s w1``.
+
+    ``spin = 0`` gives the inertial-frame joint of :func:`joint_term`.
+
+    Examples
+    --------
+    An elastic coupling, stiffer along its own x axis, rotating at ``w1``:
+
+    >>> t = coupling_term(range(6), None, stiffness=expand_matrix([3.0, 1.0], ["ux", "uy"]),
+    ...                   spin=1, omega=10.0)
+    >>> sorted(t.K), complex(np.round(t.K[2][0, 0], 12))
+    ([-2, 0, 2], (0.5+0j))
+    """
+    if isinstance(spin, bool) or not isinstance(spin, int | np.integer):
+        raise ModelError(f"`spin` must be an integer harmonic, got {spin!r}")
+    K: dict[int, np.ndarray] = {}
+    D: dict[int, np.ndarray] = {}
+    s = int(spin)
+    if stiffness is not None:
+        K = rotate_body_matrix(np.asarray(stiffness, float), axis, s)
+    if damping is not None:
+        C = np.asarray(damping, float)
+        D = rotate_body_matrix(C, axis, s)
+        for k, v in circulatory_matrix(C, axis, s, omega).items():
+            K[k] = K[k] + v if k in K else v
+    dofs, K = _pair(dofs_a, dofs_b, K)
+    _, D = _pair(dofs_a, dofs_b, D)
+    return Term(dofs, K=K, D=D)

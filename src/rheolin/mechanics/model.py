@@ -1,0 +1,403 @@
+"""``rheolin.Model``: shafts, disks, bearings, gear meshes and loads -> a periodic system.
+
+The names of the methods and arguments are those of the model file, one to one.
+
+Examples
+--------
+A rigid rotor on an anisotropic bearing with a static unbalance, turning at 100 rad/s:
+
+>>> import numpy as np, rheolin as rl
+>>> m = Model()
+>>> m.add_rigid_body("rotor", position=(0, 0, 0), mass=10.0, inertia=(0.1, 0.1, 0.2))
+>>> m.add_disk("rotor", 0, unbalance=1e-4)
+>>> m.add_bearing("b1", "rotor", 0, stiffness=[1e6, 2e6, 1e6, 1e4, 1e4, 1e4],
+...               damping=[100.0, 100.0, 100.0, 1.0, 1.0, 0.0], components=None)
+>>> a = m.assemble(speed=100.0)
+>>> a.omega, a.plan.spin["rotor"], a.system.load_harmonics
+(100.0, 1, [-1, 1])
+>>> a.dof_labels[0]
+('rotor', 0, 'ux')
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+
+from ..errors import ModelError
+from .assembly import Assembled, assemble_model, model_speed_plan
+from .gears import rectangular_wave_coefficients
+from .joints import expand_matrix
+from .rigid import RigidNode, disk, static_unbalance
+from .rigid import couple_unbalance as _add_couple
+from .rotation import unit_axis
+from .sections import Material, Section, hollow_circular, solid_circular
+from .speeds import GearPair, SpeedPlan
+
+__all__ = ["Assembled", "Model"]
+
+
+@dataclass
+class _Body:
+    name: str
+    kind: str  # "shaft" | "rigid"
+    axis: np.ndarray
+    positions: np.ndarray  # (n_nodes, 3)
+    speed_ratio: Fraction | None
+    data: dict[str, Any] = field(default_factory=dict)
+    disks: dict[int, RigidNode] = field(default_factory=dict)
+
+
+class Model:
+    """A transmission: bodies (shafts, rigid bodies), disks, joints, gear meshes and loads.
+
+    Parameters
+    ----------
+    input_body
+        Body whose speed is the ``speed`` given to :meth:`assemble`; default: the first body.
+    """
+
+    def __init__(self, input_body: str | None = None) -> None:
+        self.input_body = input_body
+        self.bodies: dict[str, _Body] = {}
+        self.joints: dict[str, dict[str, Any]] = {}
+        self.meshes: dict[str, dict[str, Any]] = {}
+        self.forces: dict[str, dict[str, Any]] = {}
+        self.gravity: np.ndarray | None = None
+
+    # ------------------------------------------------------------------ bodies
+    def _new_body(self, name: str, field_name: str = "name") -> None:
+        if not isinstance(name, str) or not name:
+            raise ModelError(f"`{field_name}` must be a non-empty string, got {name!r}")
+        if name in self.bodies:
+            raise ModelError(f"`{field_name}`: a body named {name!r} already exists")
+
+    def add_shaft(
+        self,
+        name: str,
+        positions: Sequence[float],
+        outer_diameter: float | Sequence[float] | None = None,
+        inner_diameter: float | Sequence[float] = 0.0,
+        elastic_modulus: float = 2.1e11,
+        poisson_ratio: float = 0.3,
+        density: float = 7850.0,
+        material_damping: float = 0.0,
+        axis: Sequence[float] = (0.0, 0.0, 1.0),
+        origin: Sequence[float] = (0.0, 0.0, 0.0),
+        section: Section | None = None,
+        speed_ratio: Fraction | int | None = None,
+    ) -> None:
+        """A flexible shaft of Timoshenko elements with nodes along its spin axis.
+
+        Parameters
+        ----------
+        name
+            Body name.
+        positions
+            Axial node coordinates [m] from ``origin`` along ``axis``, strictly increasing.
+        outer_diameter, inner_diameter
+            Circular (tube) section, per shaft or per element [m].
+        elastic_modulus, poisson_ratio, density
+            Material [Pa], [-], [kg/m^3].
+        material_damping
+            Rotating material damping ``beta`` [s] (``D_B = beta K_B``).
+        axis, origin
+            Spin axis and a point on it.
+        section
+            A non-circular :class:`~rheolin.mechanics.sections.Section` (e.g. ``Iy != Iz``)
+            for every element, instead of the diameters; body axes = global axes at ``t = 0``.
+        speed_ratio
+            Speed relative to the input speed for a body not connected by gears.
+
+        Examples
+        --------
+        >>> m = Model()
+        >>> m.add_shaft("s", [0.0, 0.25, 0.5], outer_diameter=0.03)
+        >>> m.bodies["s"].positions[:, 2]
+        array([0.  , 0.25, 0.5 ])
+        """
+        self._new_body(name)
+        z = np.asarray(positions, dtype=float).ravel()
+        if z.size < 2 or np.any(np.diff(z) <= 0):
+            raise ModelError("`positions` must hold >= 2 strictly increasing axial coordinates")
+        e = unit_axis(axis, "axis")
+        pts = np.asarray(origin, float) + np.outer(z, e)
+        n_el = z.size - 1
+        material = Material(
+            E=_positive(elastic_modulus, "elastic_modulus"),
+            density=float(density),
+            nu=float(poisson_ratio),
+            damping_beta=float(material_damping),
+        )
+        if section is not None:
+            if not isinstance(section, Section):
+                raise ModelError("`section` must be a rheolin.mechanics.sections.Section")
+            sections = [section] * n_el
+        elif outer_diameter is None:
+            raise ModelError("give `outer_diameter` (circular shaft) or `section`")
+        else:
+            do = _per_element(outer_diameter, n_el, "outer_diameter")
+            di = _per_element(inner_diameter, n_el, "inner_diameter")
+            sections = [
+                hollow_circular(a, b, poisson_ratio) if b > 0 else solid_circular(a, poisson_ratio)
+                for a, b in zip(do, di, strict=True)
+            ]
+        ratio = None if speed_ratio is None else Fraction(speed_ratio)
+        data = {"lengths": np.diff(z), "sections": sections, "material": material}
+        self.bodies[name] = _Body(name, "shaft", e, pts, ratio, data)
+
+    def add_rigid_body(
+        self,
+        name: str,
+        position: Sequence[float],
+        mass: float,
+        inertia: Sequence[float] | np.ndarray,
+        axis: Sequence[float] = (0.0, 0.0, 1.0),
+        speed_ratio: Fraction | int | None = None,
+    ) -> None:
+        """A body made of one rigid node (e.g. a gear on its own bearings, a housing mass)."""
+        self._new_body(name)
+        e = unit_axis(axis, "axis")
+        pts = np.asarray(position, float).reshape(1, 3)
+        ratio = None if speed_ratio is None else Fraction(speed_ratio)
+        self.bodies[name] = _Body(name, "rigid", e, pts, ratio)
+        self.bodies[name].disks[0] = RigidNode(mass, np.asarray(inertia, dtype=float))
+
+    def add_disk(
+        self,
+        body: str,
+        node: int,
+        mass: float | None = None,
+        inertia: Sequence[float] | np.ndarray | None = None,
+        outer_diameter: float | None = None,
+        width: float | None = None,
+        density: float = 7850.0,
+        inner_diameter: float = 0.0,
+        unbalance: float = 0.0,
+        unbalance_angle: float = 0.0,
+        couple_unbalance: float = 0.0,
+        couple_angle: float = 0.0,
+    ) -> None:
+        """A rigid disk / gear blank at a body node, optionally with unbalance.
+
+        Give either ``mass`` and ``inertia`` (about the centre of mass, body axes) or the
+        geometry ``outer_diameter``, ``width``, ``density``, ``inner_diameter``. With neither,
+        the unbalance is added to the node's existing disk. ``unbalance`` [kg m] is static at
+        ``unbalance_angle``; ``couple_unbalance`` [kg m^2] is dynamic at ``couple_angle``.
+        """
+        b = self._body(body, "body")
+        node = self._node(b, node)
+        e = b.axis
+        if mass is not None or inertia is not None:
+            if mass is None or inertia is None:
+                raise ModelError("`mass` and `inertia` must be given together")
+            rn = RigidNode(mass, np.asarray(inertia, dtype=float))
+        elif outer_diameter is not None:
+            if width is None:
+                raise ModelError("`width` is required with `outer_diameter`")
+            rn = disk(outer_diameter, width, density, inner_diameter, axis=e)
+        elif node in b.disks:
+            rn = b.disks[node]
+        else:
+            raise ModelError("give `mass` and `inertia`, or `outer_diameter` and `width`")
+        if unbalance:
+            rn = static_unbalance(rn, unbalance, unbalance_angle, axis=e)
+        if couple_unbalance:
+            rn = _add_couple(rn, couple_unbalance, couple_angle, axis=e)
+        if node in b.disks and (mass is not None or outer_diameter is not None):
+            raise ModelError(f"`node`: node {node} of body {body!r} already has a disk")
+        b.disks[node] = rn
+
+    # ------------------------------------------------------------------ joints and loads
+    def add_bearing(
+        self,
+        name: str,
+        body: str,
+        node: int,
+        stiffness: Any = 0.0,
+        damping: Any = 0.0,
+        components: Sequence[str] | None = ("ux", "uy"),
+        other_body: str | None = None,
+        other_node: int | None = None,
+        frame: str | None = None,
+    ) -> None:
+        """A bearing or coupling from a node to ground (default) or to another body's node.
+
+        ``stiffness`` / ``damping`` act on the relative displacement, over ``components``
+        (names from ``COMPONENTS``; None means all six): a scalar, a vector (diagonal) or a
+        matrix (cross-coupling, anisotropy). ``frame=None``: constant in the inertial frame;
+        ``frame="<body>"``: defined in that body's rotating axes.
+        """
+        self._new_item(name, self.joints)
+        b = self._body(body, "body")
+        self._node(b, node)
+        if (other_body is None) != (other_node is None):
+            raise ModelError("`other_body` and `other_node` must be given together")
+        if other_body is not None:
+            self._node(self._body(other_body, "other_body"), other_node)
+        if frame is not None:
+            self._body(frame, "frame")
+        K = expand_matrix(stiffness, components, "stiffness")
+        D = expand_matrix(damping, components, "damping")
+        self.joints[name] = dict(
+            body=body, node=node, other=(other_body, other_node), K=K, D=D, frame=frame
+        )
+
+    def add_gear_mesh(
+        self,
+        name: str,
+        pinion_body: str,
+        pinion_node: int,
+        gear_body: str,
+        gear_node: int,
+        pinion_teeth: int,
+        gear_teeth: int,
+        module: float,
+        pressure_angle: float = np.radians(20.0),
+        helix_angle: float = 0.0,
+        stiffness: float | dict[int, complex] | None = None,
+        contact_ratio: float | None = None,
+        single_stiffness: float | None = None,
+        double_stiffness: float | None = None,
+        stiffness_harmonics: int = 10,
+        damping: float = 0.0,
+        transmission_error: dict[int, complex] | None = None,
+        side: int = 1,
+        center_direction: Sequence[float] | None = None,
+    ) -> None:
+        """An external spur/helical mesh between parallel axes.
+
+        ``module`` is the normal module [m], ``pressure_angle`` the normal pressure angle
+        [rad]. Mesh stiffness: ``stiffness`` (mean [N/m] or ``{j: k_j}`` over mesh harmonics),
+        or the rectangular wave of ``contact_ratio``, ``single_stiffness``,
+        ``double_stiffness`` truncated at ``stiffness_harmonics``. ``transmission_error`` is
+        ``{j: e_j}`` [m]. ``side`` selects the flank (see ``gears.line_of_action``).
+        """
+        self._new_item(name, self.meshes)
+        for fld, bname, node in (
+            ("pinion_body", pinion_body, pinion_node),
+            ("gear_body", gear_body, gear_node),
+        ):
+            self._node(self._body(bname, fld), node)
+        if pinion_body == gear_body:
+            raise ModelError("`gear_body` must differ from `pinion_body`")
+        pair = GearPair(pinion_body, gear_body, pinion_teeth, gear_teeth)
+        if stiffness is None:
+            if None in (contact_ratio, single_stiffness, double_stiffness):
+                raise ModelError(
+                    "give `stiffness`, or `contact_ratio`, `single_stiffness` and "
+                    "`double_stiffness` (rectangular wave)"
+                )
+            assert contact_ratio is not None and single_stiffness is not None
+            assert double_stiffness is not None
+            stiffness = rectangular_wave_coefficients(
+                contact_ratio, single_stiffness, double_stiffness, stiffness_harmonics
+            )
+        _positive(module, "module")
+        self.meshes[name] = dict(
+            pair=pair,
+            pinion_node=pinion_node,
+            gear_node=gear_node,
+            module=float(module),
+            pressure_angle=float(pressure_angle),
+            helix_angle=float(helix_angle),
+            stiffness=stiffness,
+            damping=float(damping),
+            transmission_error=transmission_error,
+            side=side,
+            center_direction=center_direction,
+        )
+
+    def add_force(
+        self,
+        name: str,
+        body: str,
+        node: int,
+        force: Sequence[float] = (0.0, 0.0, 0.0),
+        moment: Sequence[float] = (0.0, 0.0, 0.0),
+        order: Fraction | int = 0,
+        phase: float = 0.0,
+        reference_body: str | None = None,
+    ) -> None:
+        """``F cos(order * W_ref t + phase)`` at a node, fixed in direction (global axes).
+
+        ``order`` is relative to the speed of ``reference_body`` (default: ``body``); 0 is a
+        static force.
+        """
+        self._new_item(name, self.forces)
+        self._node(self._body(body, "body"), node)
+        ref = body if reference_body is None else reference_body
+        self._body(ref, "reference_body")
+        self.forces[name] = dict(
+            body=body,
+            node=node,
+            force=force,
+            moment=moment,
+            order=Fraction(order),
+            phase=float(phase),
+            reference=ref,
+        )
+
+    def set_gravity(self, gravity: Sequence[float] = (0.0, -9.81, 0.0)) -> None:
+        """Uniform gravity [m/s^2] in global axes (static load ``M g`` on every body)."""
+        g = np.asarray(gravity, dtype=float).ravel()
+        if g.shape != (3,) or not np.all(np.isfinite(g)):
+            raise ModelError(f"`gravity` must be a finite 3-vector [m/s^2], got {gravity!r}")
+        self.gravity = g
+
+    # ------------------------------------------------------------------ assembly
+    def speed_plan(self) -> SpeedPlan:
+        """Exact speed ratios, ``w1 / speed`` and integer harmonics of the model."""
+        return model_speed_plan(self)
+
+    def assemble(self, speed: float) -> Assembled:
+        """Assemble at input speed ``speed`` [rad/s] (> 0); see :class:`Assembled`."""
+        return assemble_model(self, _positive(speed, "speed"))
+
+    def _body(self, name: str, field_name: str) -> _Body:
+        if name not in self.bodies:
+            raise ModelError(f"`{field_name}`: no body named {name!r}; bodies: {list(self.bodies)}")
+        return self.bodies[name]
+
+    @staticmethod
+    def _node(b: _Body, node: Any) -> int:
+        if (
+            isinstance(node, bool)
+            or not isinstance(node, int | np.integer)
+            or not (0 <= node < len(b.positions))
+        ):
+            raise ModelError(
+                f"`node` must be an integer in [0, {len(b.positions)}) for body "
+                f"{b.name!r}, got {node!r}"
+            )
+        return int(node)
+
+    @staticmethod
+    def _new_item(name: str, table: dict[str, Any]) -> None:
+        if not isinstance(name, str) or not name:
+            raise ModelError(f"`name` must be a non-empty string, got {name!r}")
+        if name in table:
+            raise ModelError(f"`name`: {name!r} is already used")
+
+
+def _positive(x: Any, name: str) -> float:
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        raise ModelError(f"`{name}` must be a positive number, got {x!r}") from None
+    if not np.isfinite(v) or v <= 0:
+        raise ModelError(f"`{name}` must be a positive finite number, got {x!r}")
+    return v
+
+
+def _per_element(x: Any, n: int, name: str) -> np.ndarray:
+    a = np.asarray(x, dtype=float).ravel()
+    if a.size == 1:
+        a = np.full(n, a[0])
+    if a.size != n or not np.all(np.isfinite(a)) or np.any(a < 0):
+        raise ModelError(f"`{name}` must be one value or one per element ({n}), >= 0")
+    return a
