@@ -13,6 +13,7 @@ import logging
 from .errors import ModelError
 from .floquet import FloquetResult, floquet
 from .harmonics import HarmonicSet
+from .mechanics import Assembled, Model
 from .solution import STATUS, Solution
 from .solvers import METHODS, solve
 from .system import PeriodicSystem
@@ -20,8 +21,10 @@ from .system import PeriodicSystem
 __all__ = [
     "METHODS",
     "STATUS",
+    "Assembled",
     "FloquetResult",
     "HarmonicSet",
+    "Model",
     "ModelError",
     "PeriodicSystem",
     "Solution",
