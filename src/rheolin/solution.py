@@ -61,6 +61,11 @@ class Solution:
     max_floquet_real: float | None = None
     info: dict = field(default_factory=dict)
 
+    @property
+    def frequencies(self) -> np.ndarray:
+        """Physical frequency of each harmonic [Hz]: ``n omega / (2 pi)``."""
+        return self.harmonics * self.omega / (2.0 * np.pi)
+
     def harmonic(self, n: int) -> np.ndarray:
         """``q_n``; raises KeyError if ``n`` is not in the harmonic set."""
         hit = np.flatnonzero(self.harmonics == n)
