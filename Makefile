@@ -13,7 +13,10 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/rheolin demo
+	$(BIN)/rheolin example gearbox > demo_gearbox.toml
+	$(BIN)/rheolin run demo_gearbox.toml --out demo_results/run
+	$(BIN)/rheolin sweep demo_gearbox.toml --speeds 1500:4500:500rpm --max-order 30 \
+		--out demo_results/sweep --no-stability-map
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests bench

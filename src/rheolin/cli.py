@@ -1,30 +1,95 @@
 """Command line ``rheolin``: the terminal belongs to this module only.
 
-Exit codes: 0 success; 1 the computation did not succeed (not converged or unstable);
-2 invalid input (model file or options).
+Exit codes (every command):
+
+* 0 -- success;
+* 1 -- the computation ran but did not succeed (not converged, or the operating point is
+  unstable); results are still written and say so;
+* 2 -- invalid input: model file, options, or a command whose optional part is missing.
 """
 
 from __future__ import annotations
 
+import importlib
+import json
+import sys
 import time
+from pathlib import Path
+from typing import Any
 
+import numpy as np
 import typer
 from rich.console import Console
-from rich.table import Table
+from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
 from . import __version__
-from .examples import chain_with_mesh
-from .floquet import floquet
-from .harmonics import HarmonicSet
-from .solvers import METHODS, solve
-from .solvers.solve import stability_harmonics
+from ._cli_report import parse_speed, parse_speeds, print_summary
+from .errors import ModelError
 
 app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
-    help="rheolin: periodic steady state and stability of rotating transmissions.",
+    help="rheolin: periodic steady state and stability of rotating transmissions. "
+    "Exit codes: 0 success, 1 not converged or unstable, 2 invalid input.",
 )
 console = Console()
+err = Console(stderr=True)
+
+MODEL = typer.Argument(..., help="Model file (TOML, see docs/model-format.md).")
+OUT = typer.Option(None, "--out", "-o", help="Output directory (created).")
+METHOD = typer.Option("auto", help="Solver: auto or any registered method (see --help of run).")
+HARMONICS = typer.Option(
+    None, "--harmonics", help="Closure order of the harmonic set (default: the file's, else 2)."
+)
+MAX_ORDER = typer.Option(
+    None,
+    "--max-order",
+    help="Frequency cut-off in orders of the input speed (default: the file's, else none).",
+)
+STABILITY = typer.Option(
+    "auto", help="Floquet check: auto (small models only), on, off.", case_sensitive=False
+)
+
+
+def _fail(message: str) -> typer.Exit:
+    err.print(f"[red]error:[/red] {message}", highlight=False, markup=True)
+    return typer.Exit(2)
+
+
+def _load(path: Path) -> Any:
+    from .io import read_model
+
+    try:
+        return read_model(path)
+    except ModelError as exc:
+        raise _fail(str(exc)) from None
+
+
+def _options(
+    lm: Any, method: str, harmonics: int | None, max_order: float | None, stability: str
+) -> dict[str, Any]:
+    from .solvers import METHODS
+
+    allowed = ["auto", *sorted(METHODS)]
+    if method not in allowed:
+        raise _fail(f"--method must be one of {allowed}, got {method!r}")
+    if harmonics is not None and harmonics < 0:
+        raise _fail(f"--harmonics must be >= 0, got {harmonics}")
+    if max_order is not None and not max_order > 0:
+        raise _fail(f"--max-order must be > 0, got {max_order}")
+    flags = {"auto": None, "on": True, "off": False}
+    if stability.lower() not in flags:
+        raise _fail(f"--stability must be auto, on or off, got {stability!r}")
+    h = lm.spec.harmonics
+    return dict(
+        method=method,
+        order=h.order if harmonics is None else harmonics,
+        max_order=h.max_order if max_order is None else max_order,
+        stability=flags[stability.lower()],
+    )
+
+
+DEMO_OUT = typer.Option(Path("demo_results"), help="Output directory.")
 
 
 @app.callback()
@@ -39,52 +104,237 @@ def version() -> None:
 
 
 @app.command()
-def demo(
-    dofs: int = typer.Option(600, help="Size of the demo chain (DOF)."),
-    harmonics: int = typer.Option(2, help="Closure order of the harmonic set."),
+def validate(model: Path = MODEL) -> None:
+    """Check a model file; exit 0 if valid, 2 with the field paths of every problem if not."""
+    lm = _load(model)
+    m = lm.model
+    console.print(
+        f"{model}: valid: {len(m.bodies)} bodies, {len(m.joints)} bearings/couplings, "
+        f"{len(m.meshes)} gear meshes, {len(m.forces)} forces; w1 = "
+        f"{m.speed_plan().base} x input speed"
+    )
+
+
+@app.command()
+def example(name: str = typer.Argument("gearbox", help="Example name.")) -> None:
+    """Write a built-in example model file to stdout: rheolin example gearbox > model.toml."""
+    from .data import EXAMPLES, example_text
+
+    if name not in EXAMPLES:
+        listing = ", ".join(f"{k} ({v})" for k, v in EXAMPLES.items())
+        raise _fail(f"no example named {name!r}; examples: {listing}")
+    sys.stdout.write(example_text(name))
+
+
+@app.command()
+def run(
+    model: Path = MODEL,
+    speed: str = typer.Option(None, help="Input speed, e.g. 3000rpm (default: the file's)."),
+    out: Path = OUT,
+    method: str = METHOD,
+    harmonics: int = HARMONICS,
+    max_order: float = MAX_ORDER,
+    stability: str = STABILITY,
+    nodes: str = typer.Option(None, help="Orbit/spectrum nodes, e.g. input:3,output:6."),
+    plots: bool = typer.Option(True, help="Write PNG plots."),
+    as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
 ) -> None:
-    """Solve a small geared chain with an asymmetric rotating body by every method."""
-    system = chain_with_mesh(dofs)
-    hset = HarmonicSet.closure(system, order=harmonics)
-    positive = [k for k in system.coefficient_harmonics if k > 0]
-    console.print(
-        f"[bold]Demo system[/bold]: {system.n} DOF, base frequency {system.omega:.2f} rad/s, "
-        f"coefficient harmonics ±{positive}, {len(hset)} harmonics in the closure set"
-    )
-    table = Table(title="Periodic steady state by method")
-    for col in ("method", "success", "iterations", "residual", "seconds", "max |q| [m]"):
-        table.add_column(col, justify="left" if col == "method" else "right")
-    reference = None
-    notes: list[str] = []
-    for method in ("gmres", "perturbation", "direct"):
-        if method not in METHODS:
-            continue
-        t0 = time.perf_counter()
-        sol = solve(system, hset, method=method, stability=False)
-        dt = time.perf_counter() - t0
-        if reference is None and sol.success:
-            reference = sol
-        amp = float(abs(sol.q).max())
-        table.add_row(
-            method,
-            "yes" if sol.success else "[red]no[/red]",
-            str(sol.iterations),
-            f"{sol.residual:.2e}",
-            f"{dt:.3f}",
-            f"{amp:.3e}",
-        )
-        notes.append(f"{method}: {sol.message}")
-    console.print(table)
-    for note in notes:
-        console.print(f"  {note}")
-    small = chain_with_mesh(12, teeth=5, mesh_harmonics=2)
-    stab = floquet(small, stability_harmonics(small))
-    console.print(
-        f"Floquet (Hill) check on a 12-DOF variant with 5 teeth: largest real part "
-        f"{stab.max_real:.3g} 1/s -> {'stable' if stab.stable else '[red]unstable[/red]'}"
-    )
-    if reference is None:
+    """Solve one operating point; write DIR/results.nc, DIR/summary.json and plots."""
+    from .results import point_dataset, solve_point, summarize, write_dataset, write_summary
+
+    lm = _load(model)
+    opts = _options(lm, method, harmonics, max_order, stability)
+    try:
+        w = parse_speed(speed) if speed is not None else lm.spec.model.speed
+    except ModelError as exc:
+        raise _fail(str(exc)) from None
+    if w is None:
+        raise _fail("give --speed (the model file has no model.speed)")
+    out_dir = Path(out) if out is not None else Path(f"{model.stem}_results")
+    t0 = time.perf_counter()
+    point = solve_point(lm.model, w, **opts)
+    ds = point_dataset(point, model_sha256=lm.sha256, model_name=lm.spec.model.name)
+    node_list = None
+    if nodes:
+        node_list = [x.strip() for x in nodes.split(",") if x.strip()]
+        bad = [x for x in node_list if x not in ds["node"].values]
+        if bad:
+            raise _fail(f"--nodes: unknown {bad}; nodes look like {ds['node'].values[0]!r}")
+    write_dataset(ds, out_dir / "results.nc")
+    summary = summarize(ds)
+    summary["model_file"] = str(model)
+    write_summary(summary, out_dir / "summary.json")
+    written = [out_dir / "results.nc", out_dir / "summary.json"]
+    if plots:
+        from .plots import point_plots
+
+        written += point_plots(ds, out_dir, node_list)
+    seconds = time.perf_counter() - t0
+    if as_json:
+        sys.stdout.write(json.dumps(summary, indent=2) + "\n")
+    else:
+        print_summary(console, summary, seconds)
+        console.print("wrote " + ", ".join(str(p) for p in written))
+    if not point.solution.success:
         raise typer.Exit(1)
+
+
+def _stability_api(name: str) -> Any:
+    """``rheolin.stability.<name>``, or None when that package (or the name) is missing."""
+    try:
+        module = importlib.import_module("rheolin.stability")
+    except ImportError:
+        return None
+    return getattr(module, name, None)
+
+
+def _stability_map(model: Any, speeds: np.ndarray) -> Any:
+    fn = _stability_api("stability_map")
+    return None if fn is None else fn(model, speeds)
+
+
+@app.command()
+def sweep(
+    model: Path = MODEL,
+    speeds: str = typer.Option(..., help="start:stop:step with unit (500:6000:50rpm) or a list."),
+    out: Path = OUT,
+    method: str = METHOD,
+    harmonics: int = HARMONICS,
+    max_order: float = MAX_ORDER,
+    stability: str = STABILITY,
+    stability_map: bool = typer.Option(
+        True, help="Also compute rheolin.stability.stability_map when it is installed."
+    ),
+    plots: bool = typer.Option(True, help="Write the response-vs-speed plot."),
+) -> None:
+    """Solve over speeds; write DIR/sweep.nc, DIR/sweep.json and DIR/sweep.png."""
+    from .io.atomic import atomic_write
+    from .results.dataset import write_dataset
+    from .results.sweep import sweep_speeds
+
+    lm = _load(model)
+    opts = _options(lm, method, harmonics, max_order, stability)
+    try:
+        w = parse_speeds(speeds)
+    except ModelError as exc:
+        raise _fail(str(exc)) from None
+    out_dir = Path(out) if out is not None else Path(f"{model.stem}_sweep")
+    columns = (
+        TextColumn("{task.description}"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total}"),
+        TimeRemainingColumn(),
+    )
+    with Progress(*columns, console=err) as bar:
+        task = bar.add_task("sweep", total=len(w))
+
+        def step(i: int, p: Any) -> None:
+            s = p.solution
+            bar.update(
+                task,
+                advance=1,
+                description=f"{w[i] * 30 / np.pi:7.0f} rpm {'ok' if s.success else 'FAILED'}",
+            )
+
+        ds = sweep_speeds(lm.model, w.tolist(), progress=step, **opts)
+    ranges: list[tuple[float, float]] = []
+    smap = _stability_map(lm.model, w) if stability_map else None
+    if smap is not None:
+        ds["map_max_real"] = ("speed", np.asarray(smap.max_real, dtype=float), {"units": "1/s"})
+        ranges = [(lo * 30 / np.pi, hi * 30 / np.pi) for lo, hi in smap.unstable_ranges]
+    ds.attrs["model_sha256"] = lm.sha256
+    ds.attrs["stability_map"] = "computed" if smap is not None else "not available"
+    write_dataset(ds, out_dir / "sweep.nc")
+    table = {
+        "model_file": str(model),
+        "model_sha256": lm.sha256,
+        "speeds_rpm": ds["speed_rpm"].values.tolist(),
+        "success": ds["success"].values.astype(bool).tolist(),
+        "iterations": ds["iterations"].values.tolist(),
+        "stable": [None if s < 0 else bool(s) for s in ds["stable"].values],
+        "unstable_ranges_rpm": ranges,
+    }
+    with atomic_write(out_dir / "sweep.json") as tmp:
+        tmp.write_text(json.dumps(table, indent=2) + "\n")
+    if plots:
+        from .plots import sweep_plot
+
+        sweep_plot(ds, out_dir / "sweep.png", ranges)
+    failed = int((ds["success"] == 0).sum())
+    unstable = int((ds["stable"] == 0).sum())
+    unchecked = int((ds["stable"] < 0).sum())
+    console.print(
+        f"{len(w)} speeds: {len(w) - failed} converged, {failed} not successful; stability: "
+        f"{unstable} unstable, {unchecked} not checked"
+        + (f"; stability map unstable ranges [rpm]: {ranges}" if smap is not None else "")
+    )
+    console.print(
+        f"wrote {out_dir / 'sweep.nc'}, {out_dir / 'sweep.json'}"
+        + (f", {out_dir / 'sweep.png'}" if plots else "")
+    )
+    if failed:
+        raise typer.Exit(1)
+
+
+@app.command()
+def campbell(
+    model: Path = MODEL,
+    speeds: str = typer.Option(..., help="start:stop:step with unit, e.g. 0:6000:100rpm."),
+    out: Path = OUT,
+) -> None:
+    """Campbell diagram (needs rheolin.stability): DIR/campbell.nc and DIR/campbell.png."""
+    campbell_fn = _stability_api("campbell")
+    if campbell_fn is None:
+        raise _fail("the campbell command needs rheolin.stability.campbell (not installed)")
+    lm = _load(model)
+    try:
+        w = parse_speeds(speeds)
+    except ModelError as exc:
+        raise _fail(str(exc)) from None
+    from .plots.campbell import plot_campbell
+    from .results.dataset import write_dataset
+
+    out_dir = Path(out) if out is not None else Path(f"{model.stem}_campbell")
+    result = campbell_fn(lm.model, w)
+    write_dataset(result.to_dataset(), out_dir / "campbell.nc")
+    plot_campbell(result, out_dir / "campbell.png")
+    console.print(f"wrote {out_dir / 'campbell.nc'}, {out_dir / 'campbell.png'}")
+
+
+@app.command()
+def demo(out: Path = DEMO_OUT) -> None:
+    """The embedded gearbox: one operating point (3000 rpm) and a short sweep."""
+    from .data import example_path
+
+    path = example_path("gearbox")
+    console.rule("rheolin run (gearbox example, 3000 rpm)")
+    code = _invoke(["run", str(path), "--out", str(out / "run")])
+    console.rule("rheolin sweep (1500..4500 rpm)")
+    code = max(
+        code,
+        _invoke(
+            [
+                "sweep",
+                str(path),
+                "--speeds",
+                "1500:4500:500rpm",
+                "--max-order",
+                "30",
+                "--out",
+                str(out / "sweep"),
+                "--no-stability-map",
+            ]
+        ),
+    )
+    raise typer.Exit(code)
+
+
+def _invoke(args: list[str]) -> int:
+    try:
+        app(args, standalone_mode=False)
+    except typer.Exit as exc:
+        return int(exc.exit_code)
+    return 0
 
 
 def main() -> None:

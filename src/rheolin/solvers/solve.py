@@ -105,20 +105,24 @@ def solve(
 AUTO_STABILITY_SIZE = 1200
 
 
+def _stability_order(system: PeriodicSystem) -> int:
+    kmax = max((abs(k) for k in system.coefficient_harmonics), default=0)
+    return 2 * kmax + 4 if kmax else 0
+
+
 def stability_harmonics(system: PeriodicSystem) -> HarmonicSet:
     """Dense Hill truncation for a stability check: twice the widest coefficient harmonic + 4."""
-    kmax = max((abs(k) for k in system.coefficient_harmonics), default=0)
-    return HarmonicSet.full(2 * kmax + 4 if kmax else 0)
+    return HarmonicSet.full(_stability_order(system))
 
 
 def _check_stability(system: PeriodicSystem, sol: Solution, stability: bool | None) -> Solution:
     if stability is False:
         return sol
-    hset = stability_harmonics(system)
-    if stability is None and 2 * system.n * len(hset) > AUTO_STABILITY_SIZE:
+    hill_size = 2 * system.n * (2 * _stability_order(system) + 1)
+    if stability is None and hill_size > AUTO_STABILITY_SIZE:
         sol.message += "; stability not checked (system too large for the dense Hill check)"
         return sol
-    res = floquet(system, hset)
+    res = floquet(system, stability_harmonics(system))
     sol.stable, sol.max_floquet_real = res.stable, res.max_real
     if not res.stable and sol.success:
         sol.success, sol.status = False, 4

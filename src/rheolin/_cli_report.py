@@ -1,0 +1,128 @@
+"""Terminal rendering for the CLI (rich): summaries of runs and sweeps; option parsing."""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Any
+
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+from .errors import ModelError
+from .io.units import UnitError, to_si
+
+__all__ = ["parse_speed", "parse_speeds", "print_summary"]
+
+_RANGE = re.compile(r"^\s*([-+0-9.eE]+)\s*:\s*([-+0-9.eE]+)\s*:\s*([-+0-9.eE]+)\s*(.*)$")
+
+
+def parse_speed(text: str, option: str = "--speed") -> float:
+    """``"3000rpm"`` -> rad/s; a bare number is rad/s.
+
+    >>> round(parse_speed("3000rpm"), 6)
+    314.159265
+    """
+    try:
+        v = to_si(text, "speed")
+    except UnitError as exc:
+        raise ModelError(f"{option}: {exc}") from None
+    if not v > 0:
+        raise ModelError(f"{option}: the speed must be > 0, got {text!r}")
+    return v
+
+
+def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
+    """``"500:6000:50rpm"`` (start:stop:step, stop included) or ``"1000,2000 rpm"`` -> rad/s.
+
+    >>> (parse_speeds("1000:3000:1000rpm") * 30 / np.pi).round(6).tolist()
+    [1000.0, 2000.0, 3000.0]
+    """
+    m = _RANGE.match(text)
+    if m:
+        unit = m.group(4).strip()
+        try:
+            start, stop, step = (float(m.group(i)) for i in (1, 2, 3))
+        except ValueError:
+            raise ModelError(f"{option}: cannot read {text!r}; write e.g. 500:6000:50rpm") from None
+        if not (step > 0 and stop >= start > 0):
+            raise ModelError(f"{option}: need 0 < start <= stop and step > 0, got {text!r}")
+        count = math.floor((stop - start) / step + 1e-9) + 1
+        if count > 10000:
+            raise ModelError(f"{option}: {count} speeds is too many (at most 10000)")
+        values = [start + i * step for i in range(count)]
+    else:
+        parts = [p for p in re.split(r"[,\s]+", text.strip()) if p]
+        unit = ""
+        if parts and re.match(r"^[A-Za-z/]", parts[-1]):
+            unit = parts.pop()
+        tail = re.match(r"^([-+0-9.eE]+)([A-Za-z/].*)$", parts[-1]) if parts else None
+        if tail:
+            parts[-1], unit = tail.group(1), tail.group(2)
+        try:
+            values = [float(p) for p in parts]
+        except ValueError:
+            raise ModelError(f"{option}: cannot read {text!r}; write e.g. 500:6000:50rpm") from None
+        if not values:
+            raise ModelError(f"{option}: no speeds in {text!r}")
+    return np.array([parse_speed(f"{v} {unit}".strip(), option) for v in values])
+
+
+def _um(x: float) -> str:
+    return f"{x * 1e6:.3g} µm"
+
+
+def print_summary(console: Console, s: dict[str, Any], seconds: float) -> None:
+    """Readable summary of one operating point (the dict of ``rheolin.results.summarize``)."""
+    ok = "[green]converged[/green]" if s["success"] else "[red]NOT successful[/red]"
+    console.print(
+        f"[bold]Operating point[/bold] {s['speed_rpm']:.1f} rpm "
+        f"({s['speed']:.4g} rad/s), base frequency w1 = {s['base_frequency']:.4g} rad/s"
+    )
+    console.print(
+        f"method {s['method']} (asked: {s['requested_method']}), {s['iterations']} iterations, "
+        f"residual {s['residual']:.2e}: {ok}; {s['harmonic_count']} harmonics x "
+        f"{s['n_dof']} DOF, {seconds:.2f} s"
+    )
+    stab = s["stability"]
+    colour = {"stable": "green", "unstable": "red"}.get(stab, "yellow")
+    extra = (
+        ""
+        if s["max_floquet_real"] is None
+        else f" (max Floquet real part {s['max_floquet_real']:.3g} 1/s)"
+    )
+    console.print(f"stability: [{colour}]{stab}[/{colour}]{extra}")
+    console.print(f"[dim]{s['message']}[/dim]")
+    t = Table(title="Largest responses per body (radial, single-sided amplitude)")
+    for col in ("body", "node", "static", "dynamic (sum)", "largest harmonics"):
+        t.add_column(col)
+    for body, b in s["bodies"].items():
+        tops = ", ".join(
+            f"{_um(h['amplitude'])} @ {h['frequency_hz']:.1f} Hz (order {h['order']:.3g})"
+            for h in b["largest_harmonics"][:2]
+        )
+        t.add_row(
+            body, b["node"], _um(b["static_radial_m"]), _um(b["radial_amplitude_bound_m"]), tops
+        )
+    console.print(t)
+    if "bearings" in s:
+        t = Table(title="Bearing forces (radial)")
+        for col in ("bearing", "static [N]", "dynamic sum [N]", "largest harmonic"):
+            t.add_column(col)
+        for name, b in s["bearings"].items():
+            h = b["largest_harmonics"][:1]
+            top = f"{h[0]['amplitude']:.3g} N @ {h[0]['frequency_hz']:.1f} Hz" if h else "-"
+            t.add_row(name, f"{b['static_radial_N']:.3g}", f"{b['dynamic_radial_sum_N']:.3g}", top)
+        console.print(t)
+    if "meshes" in s:
+        t = Table(title="Mesh dynamic transmission error (line of action)")
+        for col in ("mesh", "mean", "largest harmonics"):
+            t.add_column(col)
+        for name, m in s["meshes"].items():
+            tops = ", ".join(
+                f"{_um(h['amplitude'])} @ {h['frequency_hz']:.1f} Hz"
+                for h in m["largest_harmonics"][:2]
+            )
+            t.add_row(name, _um(m["mean_m"]), tops)
+        console.print(t)

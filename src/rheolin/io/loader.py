@@ -1,0 +1,331 @@
+"""Load a TOML model file into a :class:`rheolin.mechanics.Model`, validating it once.
+
+Every problem is reported as a :class:`rheolin.ModelError` whose lines start with the field
+path (``shafts[1].bearings[0].stiffness``) and say what is allowed.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import tomllib
+import typing
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from pydantic import BaseModel, ValidationError
+
+from ..errors import ModelError
+from ..mechanics.joints import COMPONENTS
+from ..mechanics.model import Model
+from ..mechanics.sections import general_section
+from .schema import Bearing, ModelFile, Shaft
+from .units import UnitError, to_si
+
+__all__ = ["LoadedModel", "load_model", "parse_model", "read_model"]
+
+#: Relative tolerance between the centre distance of the gear nodes and ``m (z1 + z2) / 2``.
+CENTRE_DISTANCE_RTOL = 0.03
+
+
+@dataclass
+class LoadedModel:
+    """A validated model file: the Model, the parsed file and the SHA-256 of its bytes."""
+
+    model: Model
+    spec: ModelFile
+    sha256: str
+    path: str
+
+
+def load_model(path: str | Path) -> Model:
+    """Read and validate a model file; return the :class:`~rheolin.mechanics.Model`.
+
+    >>> from rheolin.data import example_path
+    >>> m = load_model(example_path("gearbox"))
+    >>> sorted(m.bodies)
+    ['input', 'intermediate', 'output']
+    """
+    return read_model(path).model
+
+
+def read_model(path: str | Path) -> LoadedModel:
+    """Like :func:`load_model`, also returning the parsed file and its hash."""
+    p = Path(path)
+    try:
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise ModelError(f"cannot read model file {str(p)!r}: {exc.strerror}") from None
+    return parse_model(raw, str(p))
+
+
+def parse_model(raw: bytes | str, source: str = "<string>") -> LoadedModel:
+    """Validate TOML text; see :func:`load_model`."""
+    data = raw.encode() if isinstance(raw, str) else raw
+    try:
+        doc = tomllib.loads(data.decode("utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ModelError(f"{source}: not valid TOML: {exc}") from None
+    try:
+        spec = ModelFile.model_validate(doc)
+    except ValidationError as exc:
+        raise ModelError(_format(exc, source)) from None
+    model = _Builder(spec).build()
+    return LoadedModel(model, spec, hashlib.sha256(data).hexdigest(), source)
+
+
+# ---------------------------------------------------------------------- error messages
+def _path(loc: tuple[Any, ...]) -> str:
+    out = ""
+    for part in loc:
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+    return out or "<file>"
+
+
+def _fields_at(loc: tuple[Any, ...]) -> list[str]:
+    """The keys allowed at ``loc`` (for "unknown key" messages)."""
+    cls: Any = ModelFile
+    for part in loc:
+        if isinstance(part, int):
+            continue
+        fields = getattr(cls, "model_fields", {})
+        field = fields.get(part)
+        if field is None:
+            return []
+        cls = _model_in(field.annotation)
+    return list(getattr(cls, "model_fields", {}))
+
+
+def _model_in(annotation: Any) -> Any:
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in typing.get_args(annotation):
+        found = _model_in(arg)
+        if found is not None:
+            return found
+    return None
+
+
+def _format(exc: ValidationError, source: str) -> str:
+    lines, seen = [], set()
+    for err in exc.errors():
+        loc = tuple(x for x in err["loc"] if not (isinstance(x, str) and "[" in x))
+        path = _path(loc)
+        kind, msg = err["type"], err["msg"].removeprefix("Value error, ")
+        if kind == "extra_forbidden":
+            msg = f"unknown key; allowed keys here: {', '.join(_fields_at(loc[:-1]))}"
+        elif kind == "missing":
+            msg = "required field is missing"
+        if (path, msg) in seen:  # union members repeat the same complaint
+            continue
+        seen.add((path, msg))
+        lines.append(f"{path}: {msg}")
+    return f"{source}: invalid model file\n  " + "\n  ".join(lines)
+
+
+# ---------------------------------------------------------------------- building
+_KIND = {True: "stiffness", False: "rotational_stiffness"}
+
+
+def _joint_matrix(value: Any, components: list[str], kind: str, path: str) -> np.ndarray:
+    """Scalar, vector (diagonal) or matrix with units checked per component pair."""
+    trans = [c.startswith("u") for c in components]
+
+    def unit_kind(i: int, j: int) -> str:
+        base = {"stiffness": "stiffness", "damping": "damping"}[kind]
+        if trans[i] and trans[j]:
+            return base
+        if not trans[i] and not trans[j]:
+            return "rotational_" + base
+        return "cross_" + base
+
+    def conv(x: Any, i: int, j: int, where: str) -> float:
+        try:
+            return to_si(x, unit_kind(i, j))
+        except UnitError as exc:
+            raise ModelError(f"{where}: {exc}") from None
+
+    n = len(components)
+    if not isinstance(value, list):
+        kinds = {unit_kind(i, i) for i in range(n)}
+        if isinstance(value, str) and len(kinds) > 1:
+            raise ModelError(
+                f"{path}: one value with units cannot serve translations and rotations "
+                f"({', '.join(components)}); give a list, one per component"
+            )
+        return np.eye(n) * conv(value, 0, 0, path)
+    if all(not isinstance(r, list) for r in value):
+        if len(value) != n:
+            raise ModelError(f"{path}: expected {n} values (one per component), got {len(value)}")
+        return np.diag([conv(x, i, i, f"{path}[{i}]") for i, x in enumerate(value)])
+    if len(value) != n or any(not isinstance(r, list) or len(r) != n for r in value):
+        raise ModelError(f"{path}: expected a {n}x{n} matrix over components {components}")
+    return np.array(
+        [[conv(x, i, j, f"{path}[{i}][{j}]") for j, x in enumerate(r)] for i, r in enumerate(value)]
+    )
+
+
+class _Builder:
+    def __init__(self, spec: ModelFile) -> None:
+        self.spec = spec
+        self.nodes: dict[str, int] = {}
+        self.model = Model(input_body=spec.model.input_body)
+
+    def build(self) -> Model:
+        spec = self.spec
+        bodies: list[tuple[str, Any]] = [(f"shafts[{i}]", b) for i, b in enumerate(spec.shafts)]
+        bodies += [(f"rigid_bodies[{i}]", b) for i, b in enumerate(spec.rigid_bodies)]
+        if not bodies:
+            raise ModelError("shafts: the model needs at least one shaft or rigid body")
+        for path, b in bodies:
+            if b.name in self.nodes:
+                raise ModelError(f"{path}.name: a body named {b.name!r} already exists")
+            self.nodes[b.name] = len(b.positions) if isinstance(b, Shaft) else 1
+        if spec.model.input_body is not None:
+            self._body(spec.model.input_body, "model.input_body")
+        for path, b in bodies:
+            self._call(path, self._add_body, path, b)
+        for path, b in bodies:
+            for i, d in enumerate(b.disks):
+                self._node(b.name, d.node, f"{path}.disks[{i}].node")
+                kw = d.model_dump(exclude={"node"})
+                self._call(f"{path}.disks[{i}]", self.model.add_disk, b.name, d.node, **kw)
+            for i, j in enumerate(b.bearings):
+                self._bearing(b.name, j, f"{path}.bearings[{i}]")
+        for i, m in enumerate(spec.meshes):
+            self._mesh(m, f"meshes[{i}]")
+        for i, f in enumerate(spec.forces):
+            p = f"forces[{i}]"
+            self._node(f.body, f.node, f"{p}.node", f"{p}.body")
+            if f.reference_body is not None:
+                self._body(f.reference_body, f"{p}.reference_body")
+            kw = f.model_dump(exclude={"name", "body", "node", "order"})
+            for key, n in (("force", 3), ("moment", 3)):
+                if len(kw[key]) != n:
+                    raise ModelError(f"{p}.{key}: must have 3 components (global x, y, z)")
+            self._call(
+                p, self.model.add_force, f.name, f.body, f.node, order=Fraction(f.order), **kw
+            )
+        if spec.model.gravity is not None:
+            self._call("model.gravity", self.model.set_gravity, spec.model.gravity)
+        self._call("meshes", self.model.speed_plan)  # kinematic consistency of the gear train
+        return self.model
+
+    def _add_body(self, path: str, b: Any) -> None:
+        ratio = None if b.speed_ratio is None else Fraction(b.speed_ratio)
+        if isinstance(b, Shaft):
+            n_el = len(b.positions) - 1
+            for key in ("outer_diameter", "inner_diameter"):
+                v = getattr(b, key)
+                if v is not None and len(v) not in (1, n_el):
+                    raise ModelError(f"{path}.{key}: give one value or one per element ({n_el})")
+            if (b.section is None) == (b.outer_diameter is None):
+                raise ModelError(f"{path}: give exactly one of `outer_diameter` and `section`")
+            if len(b.origin) != 3:
+                raise ModelError(f"{path}.origin: must be a 3-vector of lengths")
+            sec = None if b.section is None else general_section(**b.section.model_dump())
+            od, idi = b.outer_diameter, b.inner_diameter
+            self.model.add_shaft(
+                b.name,
+                b.positions,
+                outer_diameter=None if od is None else (od[0] if len(od) == 1 else od),
+                inner_diameter=idi[0] if len(idi) == 1 else idi,
+                elastic_modulus=b.elastic_modulus,
+                poisson_ratio=b.poisson_ratio,
+                density=b.density,
+                material_damping=b.material_damping,
+                axis=b.axis,
+                origin=b.origin,
+                section=sec,
+                speed_ratio=ratio,
+            )
+        else:
+            if len(b.position) != 3:
+                raise ModelError(f"{path}.position: must be a 3-vector of lengths")
+            self.model.add_rigid_body(
+                b.name, b.position, b.mass, np.array(b.inertia), b.axis, speed_ratio=ratio
+            )
+
+    def _bearing(self, body: str, j: Bearing, p: str) -> None:
+        self._node(body, j.node, f"{p}.node")
+        if (j.other_body is None) != (j.other_node is None):
+            raise ModelError(f"{p}.other_node: `other_body` and `other_node` go together")
+        if j.other_body is not None:
+            self._node(j.other_body, j.other_node or 0, f"{p}.other_node", f"{p}.other_body")
+        if j.frame is not None:
+            self._body(j.frame, f"{p}.frame")
+        comps: list[str] = list(COMPONENTS) if j.components == "all" else list(j.components)
+        if len(set(comps)) != len(comps):
+            raise ModelError(f"{p}.components: repeated component names")
+        K = _joint_matrix(j.stiffness, comps, "stiffness", f"{p}.stiffness")
+        D = _joint_matrix(j.damping, comps, "damping", f"{p}.damping")
+        if np.any(np.diag(K) < 0) or np.any(np.diag(D) < 0):
+            which = "stiffness" if np.any(np.diag(K) < 0) else "damping"
+            raise ModelError(f"{p}.{which}: diagonal entries must be >= 0")
+        self._call(
+            p,
+            self.model.add_bearing,
+            j.name,
+            body,
+            j.node,
+            K,
+            D,
+            comps,
+            j.other_body,
+            j.other_node,
+            j.frame,
+        )
+
+    def _mesh(self, m: Any, p: str) -> None:
+        self._node(m.pinion_body, m.pinion_node, f"{p}.pinion_node", f"{p}.pinion_body")
+        self._node(m.gear_body, m.gear_node, f"{p}.gear_node", f"{p}.gear_body")
+        if m.pinion_body == m.gear_body:
+            raise ModelError(f"{p}.gear_body: must differ from pinion_body {m.pinion_body!r}")
+        a, b = self.model.bodies[m.pinion_body], self.model.bodies[m.gear_body]
+        xa, xb, e = a.positions[m.pinion_node], b.positions[m.gear_node], a.axis
+        dist = float(np.linalg.norm((xb - xa) - e * np.dot(xb - xa, e)))
+        nominal = m.module * (m.pinion_teeth + m.gear_teeth) / (2 * np.cos(m.helix_angle))
+        if abs(dist - nominal) > CENTRE_DISTANCE_RTOL * nominal:
+            raise ModelError(
+                f"{p}.gear_teeth: tooth counts {m.pinion_teeth}+{m.gear_teeth} with module "
+                f"{m.module * 1e3:g} mm need a centre distance of {nominal * 1e3:.4g} mm "
+                f"(within {CENTRE_DISTANCE_RTOL:.0%}), but the gear nodes are "
+                f"{dist * 1e3:.4g} mm apart"
+            )
+        stiff: Any = m.stiffness
+        if stiff is None and None in (m.contact_ratio, m.single_stiffness, m.double_stiffness):
+            raise ModelError(
+                f"{p}.stiffness: give `stiffness` (mean), or `contact_ratio`, "
+                "`single_stiffness` and `double_stiffness` (rectangular wave)"
+            )
+        te = {t.harmonic: t.amplitude / 2 * np.exp(1j * t.phase) for t in m.transmission_error}
+        kw = m.model_dump(exclude={"name", "transmission_error", "stiffness"})
+        self._call(
+            p,
+            self.model.add_gear_mesh,
+            m.name,
+            stiffness=stiff,
+            transmission_error=te or None,
+            **kw,
+        )
+
+    def _body(self, name: str, path: str) -> None:
+        if name not in self.nodes:
+            raise ModelError(f"{path}: no body named {name!r}; bodies: {list(self.nodes)}")
+
+    def _node(self, body: str, node: int, path: str, body_path: str | None = None) -> None:
+        self._body(body, body_path or path)
+        if not 0 <= node < self.nodes[body]:
+            raise ModelError(
+                f"{path}: node {node} does not exist; body {body!r} has nodes "
+                f"0..{self.nodes[body] - 1}"
+            )
+
+    @staticmethod
+    def _call(path: str, fn: Any, *args: Any, **kw: Any) -> Any:
+        try:
+            return fn(*args, **kw)
+        except ModelError as exc:
+            raise ModelError(f"{path}: {exc}") from None

@@ -1,0 +1,280 @@
+"""The model file schema (TOML), checked by pydantic; quantities converted to SI by pint.
+
+Field names are those of :class:`rheolin.mechanics.Model`'s methods. Structure and units are
+checked here; references between items (bodies, nodes, gear geometry) in
+:mod:`rheolin.io.loader`. See ``docs/model-format.md``.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator
+
+from .units import UnitError, to_si
+
+__all__ = ["Bearing", "Disk", "Force", "Mesh", "ModelFile", "RigidBody", "Shaft"]
+
+_LIST_TEXT = re.compile(r"^\s*\[?\s*([-+0-9.eE,\s]+?)\s*\]?\s+([A-Za-z][^\[\]]*)$")
+
+
+def _quantity(kind: str, sign: str = "") -> Callable[[Any], float]:
+    def convert(value: Any) -> float:
+        v = to_si(value, kind)
+        if sign == "+" and not v > 0:
+            raise UnitError(f"must be > 0, got {value!r}")
+        if sign == "0+" and not v >= 0:
+            raise UnitError(f"must be >= 0, got {value!r}")
+        return v
+
+    return convert
+
+
+def _vector(kind: str, sign: str = "") -> Callable[[Any], list[float]]:
+    one = _quantity(kind, sign)
+
+    def convert(value: Any) -> list[float]:
+        if isinstance(value, str):  # "0 20 50 90 mm" or "[0, 20, 50] mm"
+            m = _LIST_TEXT.match(value)
+            if not m:
+                return [one(value)]
+            nums = [x for x in re.split(r"[,\s]+", m.group(1)) if x]
+            return [one(f"{x} {m.group(2)}") for x in nums]
+        if isinstance(value, list):
+            out = []
+            for i, x in enumerate(value):
+                try:
+                    out.append(one(x))
+                except UnitError as exc:
+                    raise UnitError(f"entry {i}: {exc}") from None
+            return out
+        return [one(value)]
+
+    return convert
+
+
+Angle = Annotated[float, BeforeValidator(_quantity("angle"))]
+AnglePos = Annotated[float, BeforeValidator(_quantity("angle", "+"))]
+AreaPos = Annotated[float, BeforeValidator(_quantity("area", "+"))]
+CoupleUnbalanceNonNeg = Annotated[float, BeforeValidator(_quantity("couple_unbalance", "0+"))]
+DampingNonNeg = Annotated[float, BeforeValidator(_quantity("damping", "0+"))]
+DensityPos = Annotated[float, BeforeValidator(_quantity("density", "+"))]
+DensityNonNeg = Annotated[float, BeforeValidator(_quantity("density", "0+"))]
+LengthPos = Annotated[float, BeforeValidator(_quantity("length", "+"))]
+LengthNonNeg = Annotated[float, BeforeValidator(_quantity("length", "0+"))]
+MassPos = Annotated[float, BeforeValidator(_quantity("mass", "+"))]
+MassNonNeg = Annotated[float, BeforeValidator(_quantity("mass", "0+"))]
+PressurePos = Annotated[float, BeforeValidator(_quantity("pressure", "+"))]
+SecondMomentPos = Annotated[float, BeforeValidator(_quantity("second_moment", "+"))]
+SpeedPos = Annotated[float, BeforeValidator(_quantity("speed", "+"))]
+StiffnessNonNeg = Annotated[float, BeforeValidator(_quantity("stiffness", "0+"))]
+TimeNonNeg = Annotated[float, BeforeValidator(_quantity("time", "0+"))]
+UnbalanceNonNeg = Annotated[float, BeforeValidator(_quantity("unbalance", "0+"))]
+VecAcceleration = Annotated[list[float], BeforeValidator(_vector("acceleration"))]
+VecDimensionless = Annotated[list[float], BeforeValidator(_vector("dimensionless"))]
+VecForce = Annotated[list[float], BeforeValidator(_vector("force"))]
+VecLength = Annotated[list[float], BeforeValidator(_vector("length"))]
+VecLengthPos = Annotated[list[float], BeforeValidator(_vector("length", "+"))]
+VecLengthNonNeg = Annotated[list[float], BeforeValidator(_vector("length", "0+"))]
+VecMoment = Annotated[list[float], BeforeValidator(_vector("moment"))]
+Index = Annotated[int, Field(ge=0, strict=True)]
+Name = Annotated[str, Field(min_length=1)]
+Raw = float | int | str | list[Any]  # matrices whose units depend on components
+
+
+def _fraction_text(value: Any) -> str:
+    from fractions import Fraction
+
+    if isinstance(value, bool) or not isinstance(value, int | float | str):
+        raise ValueError(f"expected a number or a fraction like '1/2', got {value!r}")
+    try:
+        return str(Fraction(str(value).strip()))
+    except (ValueError, ZeroDivisionError):
+        raise ValueError(f"expected a number or a fraction like '1/2', got {value!r}") from None
+
+
+Ratio = Annotated[str, BeforeValidator(_fraction_text)]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class Section(_Strict):
+    """General section (``rheolin.mechanics.sections.general_section``)."""
+
+    area: AreaPos
+    Iy: SecondMomentPos
+    Iz: SecondMomentPos
+    torsion_constant: SecondMomentPos
+    kappa_y: float = Field(default=float("inf"), gt=0)
+    kappa_z: float = Field(default=float("inf"), gt=0)
+
+
+class Disk(_Strict):
+    """``Model.add_disk`` (the body is the enclosing shaft or rigid body)."""
+
+    node: Index
+    mass: MassNonNeg | None = None
+    inertia: list[Any] | None = None
+    outer_diameter: LengthPos | None = None
+    width: LengthPos | None = None
+    density: DensityPos = 7850.0
+    inner_diameter: LengthNonNeg = 0.0
+    unbalance: UnbalanceNonNeg = 0.0
+    unbalance_angle: Angle = 0.0
+    couple_unbalance: CoupleUnbalanceNonNeg = 0.0
+    couple_angle: Angle = 0.0
+
+    @field_validator("inertia")
+    @classmethod
+    def _inertia(cls, value: list[Any] | None) -> list[Any] | None:
+        if value is None:
+            return None
+        conv = _quantity("inertia")
+        try:
+            rows = [[conv(x) for x in r] for r in value] if isinstance(value[0], list) else None
+            J = np.array(rows) if rows is not None else np.diag([conv(x) for x in value])
+        except (UnitError, TypeError, IndexError) as exc:
+            raise ValueError(f"must be 3 values or a 3x3 matrix of inertias: {exc}") from None
+        if J.shape != (3, 3):
+            raise ValueError(f"must be 3 values or a 3x3 matrix, got shape {J.shape}")
+        scale = float(np.abs(J).max(initial=0.0))
+        if not np.allclose(J, J.T, rtol=0.0, atol=1e-9 * scale):
+            raise ValueError("the inertia (mass) matrix must be symmetric")
+        if scale == 0.0 or np.linalg.eigvalsh(0.5 * (J + J.T)).min() <= 0.0:
+            eig = np.linalg.eigvalsh(0.5 * (J + J.T))
+            raise ValueError(
+                f"the inertia (mass) matrix must be positive definite; eigenvalues {eig}"
+            )
+        return J.tolist()
+
+
+Components = Literal["all"] | list[Literal["ux", "uy", "uz", "phix", "phiy", "phiz"]]
+
+
+class Bearing(_Strict):
+    """``Model.add_bearing`` (the body is the enclosing shaft or rigid body)."""
+
+    name: Name
+    node: Index
+    stiffness: Raw = 0.0
+    damping: Raw = 0.0
+    components: Components = ["ux", "uy"]
+    other_body: Name | None = None
+    other_node: Index | None = None
+    frame: Name | None = None
+
+
+class _Body(_Strict):
+    name: Name
+    axis: VecDimensionless = [0.0, 0.0, 1.0]
+    speed_ratio: Ratio | None = None
+    disks: list[Disk] = []
+    bearings: list[Bearing] = []
+
+    @field_validator("axis")
+    @classmethod
+    def _axis(cls, v: list[float]) -> list[float]:
+        if len(v) != 3 or not any(v):
+            raise ValueError("must be a nonzero 3-vector")
+        return v
+
+
+class Shaft(_Body):
+    """``Model.add_shaft`` plus the shaft's disks and bearings."""
+
+    positions: VecLength
+    outer_diameter: VecLengthPos | None = None
+    inner_diameter: VecLengthNonNeg = [0.0]
+    elastic_modulus: PressurePos = 2.1e11
+    poisson_ratio: float = Field(default=0.3, gt=-1.0, lt=0.5)
+    density: DensityNonNeg = 7850.0
+    material_damping: TimeNonNeg = 0.0
+    origin: VecLength = [0.0, 0.0, 0.0]
+    section: Section | None = None
+
+
+class RigidBody(_Body):
+    """``Model.add_rigid_body`` plus its disks (unbalance) and bearings."""
+
+    position: VecLength
+    mass: MassPos
+    inertia: list[Any]
+
+    _inertia = field_validator("inertia")(Disk._inertia.__func__)  # type: ignore[attr-defined]
+
+
+class TransmissionError(_Strict):
+    """One harmonic ``amplitude cos(harmonic W_mesh t + phase)`` of the static TE."""
+
+    harmonic: int = Field(ge=1, strict=True)
+    amplitude: LengthNonNeg
+    phase: Angle = 0.0
+
+
+class Mesh(_Strict):
+    """``Model.add_gear_mesh``."""
+
+    name: Name
+    pinion_body: Name
+    pinion_node: Index
+    gear_body: Name
+    gear_node: Index
+    pinion_teeth: int = Field(ge=1, strict=True)
+    gear_teeth: int = Field(ge=1, strict=True)
+    module: LengthPos
+    pressure_angle: AnglePos = float(np.radians(20.0))
+    helix_angle: Angle = 0.0
+    stiffness: StiffnessNonNeg | None = None
+    contact_ratio: float | None = Field(default=None, ge=1.0, le=2.0)
+    single_stiffness: StiffnessNonNeg | None = None
+    double_stiffness: StiffnessNonNeg | None = None
+    stiffness_harmonics: int = Field(default=10, ge=0, strict=True)
+    damping: DampingNonNeg = 0.0
+    transmission_error: list[TransmissionError] = []
+    side: Literal[1, -1] = 1
+
+
+class Force(_Strict):
+    """``Model.add_force``: ``F cos(order W_ref t + phase)``."""
+
+    name: Name
+    body: Name
+    node: Index
+    force: VecForce = [0.0, 0.0, 0.0]
+    moment: VecMoment = [0.0, 0.0, 0.0]
+    order: Ratio = "0"
+    phase: Angle = 0.0
+    reference_body: Name | None = None
+
+
+class ModelInfo(_Strict):
+    """``[model]``: name, input body, default operating speed, gravity."""
+
+    name: str = ""
+    description: str = ""
+    input_body: Name | None = None
+    speed: SpeedPos | None = None
+    gravity: VecAcceleration | None = None
+
+
+class HarmonicsInfo(_Strict):
+    """``[harmonics]``: closure order and cut-off (in orders of the input speed)."""
+
+    order: int = Field(default=2, ge=0, strict=True)
+    max_order: float | None = Field(default=None, gt=0)
+
+
+class ModelFile(_Strict):
+    """The whole file."""
+
+    model: ModelInfo = ModelInfo()
+    harmonics: HarmonicsInfo = HarmonicsInfo()
+    shafts: list[Shaft] = []
+    rigid_bodies: list[RigidBody] = []
+    meshes: list[Mesh] = []
+    forces: list[Force] = []

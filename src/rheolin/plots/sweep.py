@@ -1,0 +1,96 @@
+"""Plots over speed: response vs speed per body and a waterfall, unstable ranges shaded."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+from matplotlib.colors import LogNorm
+
+from ._common import new_figure, save
+
+__all__ = ["sweep_plot"]
+
+
+def sweep_plot(
+    ds: xr.Dataset,
+    path: str | Path,
+    unstable_ranges_rpm: Sequence[tuple[float, float]] = (),
+) -> Path:
+    """Top: largest oscillating radial response per body vs speed (sum over harmonics, an
+    upper bound of the peak); bottom: waterfall (speed vs frequency, colour = amplitude at the
+    most responsive node) with shaft and mesh orders. Unstable speeds are shaded red:
+    per-speed ``stable == 0`` and the given ``unstable_ranges_rpm``; unchecked speeds are grey
+    ticks at the bottom."""
+    fig, axes = new_figure(2, 1, (9, 9))
+    ax, wf = axes[0, 0], axes[1, 0]
+    rpm = ds["speed_rpm"].values
+    osc = ds["harmonic"] > 0
+    resp = ds["response"].where(osc, 0.0)
+    for i, body in enumerate(dict.fromkeys(ds["body"].values.tolist())):
+        per_node = resp.where(ds["body"] == body, drop=True).sum("harmonic")
+        ax.semilogy(rpm, per_node.max("node") * 1e6, "o-", ms=3, color=f"C{i}", label=body)
+    ax.set_ylabel("radial dynamic response [µm]")
+    ax.set_xlabel("input speed [rpm]")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    step = float(np.median(np.diff(rpm))) if rpm.size > 1 else 1.0
+    shaded = False
+    for r, s in zip(rpm, ds["stable"].values, strict=True):
+        if s == 0:
+            for a in (ax, wf):
+                a.axvspan(
+                    r - step / 2, r + step / 2, color="tab:red", alpha=0.2, lw=0
+                ) if a is ax else a.axhspan(
+                    r - step / 2, r + step / 2, color="tab:red", alpha=0.2, lw=0
+                )
+            shaded = True
+    for lo, hi in unstable_ranges_rpm:
+        ax.axvspan(lo, hi, color="tab:red", alpha=0.2, lw=0)
+        wf.axhspan(lo, hi, color="tab:red", alpha=0.2, lw=0)
+        shaded = True
+    unchecked = rpm[ds["stable"].values < 0]
+    if unchecked.size:
+        ax.plot(
+            unchecked,
+            np.full(unchecked.size, 0.02),
+            "|",
+            color="gray",
+            transform=ax.get_xaxis_transform(),
+            label="stability not checked",
+        )
+    note = "red: unstable" if shaded else "no unstable speed found"
+    if unchecked.size == rpm.size:
+        note = "stability not checked at these speeds"
+    ax.set_title(f"response vs speed ({note})", fontsize=10)
+    ax.legend(fontsize=8)
+    node = str(resp.sum("harmonic").max("speed").idxmax("node").values)
+    amp = resp.sel(node=node).values * 1e6  # (speed, harmonic)
+    freq = ds["frequency"].values
+    ok = amp > amp.max() * 1e-6
+    sc = wf.scatter(
+        freq[ok],
+        np.broadcast_to(rpm[:, None], amp.shape)[ok],
+        c=amp[ok],
+        s=8 + 40 * (amp[ok] / amp.max()) ** 0.5,
+        cmap="viridis",
+        norm=LogNorm(amp[ok].min(), amp.max()),
+    )
+    fig.colorbar(sc, ax=wf, label=f"radial amplitude at {node} [µm]")
+    orders = json.loads(ds.attrs.get("marker_orders_json", "{}"))
+    fmax = float(freq.max())
+    for label, order in orders.items():
+        color = "tab:red" if "mesh" in label else "tab:gray"
+        wf.plot(order * rpm / 60, rpm, "--", lw=0.8, color=color)
+        x_end = order * rpm[-1] / 60
+        if x_end <= fmax:
+            wf.annotate(label, (x_end, rpm[-1]), fontsize=7, color=color, rotation=60)
+    wf.set_xlim(0, fmax * 1.02)
+    wf.set_xlabel("frequency [Hz]")
+    wf.set_ylabel("input speed [rpm]")
+    wf.set_title("waterfall (dashed: shaft speeds and mesh frequencies)", fontsize=10)
+    wf.grid(alpha=0.3)
+    return save(fig, path)

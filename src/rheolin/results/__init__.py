@@ -1,0 +1,20 @@
+"""Results: compute an operating point, label it as an ``xarray.Dataset``, write files.
+
+>>> from rheolin.results import point_dataset, complex_values
+"""
+
+from .compute import OperatingPoint, harmonic_set, solve_point
+from .dataset import complex_values, point_dataset, stability_text, write_dataset
+from .summary import summarize, write_summary
+
+__all__ = [
+    "OperatingPoint",
+    "complex_values",
+    "harmonic_set",
+    "point_dataset",
+    "solve_point",
+    "stability_text",
+    "summarize",
+    "write_dataset",
+    "write_summary",
+]

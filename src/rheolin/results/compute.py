@@ -1,0 +1,94 @@
+"""One operating point of a model: assemble, choose the harmonic set, solve.
+
+Kept apart from the CLI so that tests and scripts get exactly what ``rheolin run`` computes.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..harmonics import HarmonicSet
+from ..mechanics.assembly import Assembled
+from ..mechanics.model import Model
+from ..solution import Solution
+from ..solvers import solve
+from ..solvers.solve import AUTO_STABILITY_SIZE
+
+__all__ = ["OperatingPoint", "harmonic_set", "solve_point"]
+
+
+@dataclass
+class OperatingPoint:
+    """The assembled model at one speed, its harmonic set, the solution and timings."""
+
+    assembled: Assembled
+    harmonics: HarmonicSet
+    solution: Solution
+    seconds: float
+    settings: dict[str, Any] = field(default_factory=dict)
+    positions: dict[tuple[str, int], Any] = field(default_factory=dict)
+
+
+def harmonic_set(a: Assembled, order: int = 2, max_order: float | None = None) -> HarmonicSet:
+    """Closure harmonic set: ``order`` steps of the model's generators from the loads.
+
+    ``max_order`` caps the frequency at ``max_order`` times the input speed (None: no cap).
+    The cap is in orders, so the same harmonic indices are used at every speed of a sweep.
+
+    >>> from rheolin.io import load_model
+    >>> from rheolin.data import example_path
+    >>> a = load_model(example_path("rotor")).assemble(100.0)
+    >>> len(harmonic_set(a, order=2)) > 0
+    True
+    """
+    cap = None if max_order is None else int(max_order / float(a.base_ratio))
+    return HarmonicSet.closure(a.system, order=order, max_harmonic=cap, generators=a.generators)
+
+
+def _hill_size(a: Assembled) -> int:
+    kmax = max((abs(k) for k in a.system.coefficient_harmonics), default=0)
+    return 2 * a.system.n * (2 * (2 * kmax + 4) + 1 if kmax else 1)
+
+
+def solve_point(
+    model: Model,
+    speed: float,
+    *,
+    method: str = "auto",
+    order: int = 2,
+    max_order: float | None = None,
+    rtol: float = 1e-10,
+    stability: bool | None = None,
+    callback: Any = None,
+) -> OperatingPoint:
+    """Assemble ``model`` at input ``speed`` [rad/s] and solve for the periodic steady state.
+
+    ``stability=None`` checks Floquet stability only when the dense Hill problem is small
+    (as :func:`rheolin.solve`); the size test is made here first, without building the
+    dense harmonic set, so large models do not pay for it.
+
+    >>> from rheolin.io import load_model
+    >>> from rheolin.data import example_path
+    >>> p = solve_point(load_model(example_path("rotor")), 150.0, stability=False)
+    >>> p.solution.success, p.solution.stable
+    (True, None)
+    """
+    t0 = time.perf_counter()
+    a = model.assemble(speed)
+    hset = harmonic_set(a, order, max_order)
+    skip = stability is None and _hill_size(a) > AUTO_STABILITY_SIZE
+    sol = solve(
+        a.system,
+        hset,
+        method=method,
+        rtol=rtol,
+        callback=callback,
+        stability=False if skip else stability,
+    )
+    if skip:
+        sol.message += "; stability not checked (system too large for the dense Hill check)"
+    settings = dict(method=method, order=order, max_order=max_order, rtol=rtol)
+    positions = {(b.name, i): x for b in model.bodies.values() for i, x in enumerate(b.positions)}
+    return OperatingPoint(a, hset, sol, time.perf_counter() - t0, settings, positions)

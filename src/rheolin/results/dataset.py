@@ -1,0 +1,185 @@
+"""Labelled results (``xarray.Dataset``) of one operating point, and their NetCDF file.
+
+Complex two-sided coefficients are stored with a trailing ``part`` dimension
+(``part = ["real", "imag"]``), which every NetCDF reader understands;
+:func:`complex_values` turns such a variable back into complex numbers. Only the harmonics
+``n >= 0`` are stored (``x_{-n} = conj(x_n)``); the amplitude of harmonic ``n > 0`` of a
+real signal is ``2 |x_n|``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from .. import __version__
+from ..io.atomic import atomic_write
+from ..mechanics.assembly import Assembled
+from ..mechanics.joints import COMPONENTS
+from ..mechanics.outputs import bearing_forces, transmission_errors
+from .compute import OperatingPoint
+
+__all__ = [
+    "complex_values",
+    "frequency_markers",
+    "netcdf_engine",
+    "point_dataset",
+    "stability_text",
+    "write_dataset",
+]
+
+_UNITS = {"ux": "m", "uy": "m", "uz": "m", "phix": "rad", "phiy": "rad", "phiz": "rad"}
+_FORCE_UNITS = {"Fx": "N", "Fy": "N", "Fz": "N", "Mx": "N m", "My": "N m", "Mz": "N m"}
+
+
+def stability_text(stable: bool | None) -> str:
+    """``"stable"``, ``"unstable"`` or ``"not checked"``."""
+    return "not checked" if stable is None else ("stable" if stable else "unstable")
+
+
+def _parts(z: np.ndarray) -> np.ndarray:
+    return np.stack([z.real, z.imag], axis=-1)
+
+
+def complex_values(da: xr.DataArray) -> xr.DataArray:
+    """Recombine a variable with a ``part`` dimension into complex values.
+
+    >>> da = xr.DataArray([[1.0, 2.0]], dims=("n", "part"), coords={"part": ["real", "imag"]})
+    >>> complex_values(da).values
+    array([1.+2.j])
+    """
+    return da.sel(part="real") + 1j * da.sel(part="imag")
+
+
+def point_dataset(
+    point: OperatingPoint, *, model_sha256: str = "", model_name: str = ""
+) -> xr.Dataset:
+    """Dataset of node displacements, bearing forces and mesh DTE over the harmonics ``n >= 0``.
+
+    Coordinates: ``harmonic`` (index ``n``), ``frequency`` [Hz] and ``order`` (relative to
+    the input speed) on ``harmonic``; ``node`` (``"body:i"``) with ``body``, ``node_index``
+    and ``position``; ``component``; ``bearing``; ``mesh``; ``part``.
+    """
+    a, sol = point.assembled, point.solution
+    keep = sol.harmonics >= 0
+    harmonics = sol.harmonics[keep]
+    freq = harmonics * a.omega / (2 * math.pi)
+    order = harmonics * float(a.base_ratio)
+    nodes = list(a.node_index)
+    idx = np.array([6 * a.node_index[k] + np.arange(6) for k in nodes])  # (node, 6)
+    q = sol.q[keep][:, idx]  # (harmonic, node, component)
+    coords: dict[str, Any] = {
+        "harmonic": ("harmonic", harmonics),
+        "frequency": ("harmonic", freq, {"units": "Hz"}),
+        "order": ("harmonic", order, {"units": "1", "long_name": "order of the input speed"}),
+        "node": ("node", [f"{b}:{i}" for b, i in nodes]),
+        "body": ("node", [b for b, _ in nodes]),
+        "node_index": ("node", np.array([i for _, i in nodes])),
+        "component": ("component", list(COMPONENTS)),
+        "force_component": ("force_component", list(_FORCE_UNITS)),
+        "part": ("part", ["real", "imag"]),
+        "xyz": ("xyz", ["x", "y", "z"]),
+    }
+    data: dict[str, Any] = {
+        "displacement": (
+            ("harmonic", "node", "component", "part"),
+            _parts(q),
+            {"units": "m (translations), rad (rotations)", "long_name": "two-sided q_n"},
+        ),
+        "position": (
+            ("node", "xyz"),
+            np.array([point.positions.get(k, np.zeros(3)) for k in nodes]),
+            {"units": "m"},
+        ),
+    }
+    names = list(a.joints)
+    if names:
+        F = np.array([[r.value for r in bearing_forces(sol, a, j)] for j in names])
+        coords["bearing"] = ("bearing", names)
+        data["bearing_force"] = (
+            ("bearing", "harmonic", "force_component", "part"),
+            _parts(F),
+            {"units": "N (forces), N m (moments)", "long_name": "force on the support"},
+        )
+    meshes = list(a.meshes)
+    if meshes:
+        E = np.array([[r.value[0] for r in transmission_errors(sol, a, m)] for m in meshes])
+        coords["mesh"] = ("mesh", meshes)
+        data["dte"] = (
+            ("mesh", "harmonic", "part"),
+            _parts(E),
+            {"units": "m", "long_name": "dynamic transmission error (line of action)"},
+        )
+    hist = np.asarray(sol.history, dtype=float)
+    data["residual_history"] = (("iteration",), hist, {"units": "1"})
+    coords["iteration"] = ("iteration", np.arange(1, hist.size + 1))
+    ds = xr.Dataset(data, coords=coords)
+    ds.attrs["markers_json"] = json.dumps(frequency_markers(a))
+    ds.attrs.update(
+        {
+            "title": f"rheolin steady state{': ' + model_name if model_name else ''}",
+            "rheolin_version": __version__,
+            "speed": a.speed,
+            "speed_units": "rad/s",
+            "speed_rpm": a.speed * 30 / math.pi,
+            "base_frequency": a.omega,
+            "base_frequency_units": "rad/s",
+            "method": sol.method,
+            "requested_method": str(point.settings.get("method", "")),
+            "success": int(sol.success),
+            "status": int(sol.status),
+            "message": sol.message,
+            "iterations": int(sol.iterations),
+            "residual": float(sol.residual),
+            "stability": stability_text(sol.stable),
+            "max_floquet_real": float("nan")
+            if sol.max_floquet_real is None
+            else float(sol.max_floquet_real),
+            "harmonic_count": len(sol.harmonics),
+            "closure_order": int(point.settings.get("order", 0)),
+            "max_order": float(point.settings.get("max_order") or 0.0),
+            "n_dof": int(a.system.n),
+            "model_sha256": model_sha256,
+            "solve_seconds": float(point.seconds),
+            "convention": "x(t) = sum_n x_n exp(i n w1 t); stored n >= 0; amplitude 2|x_n|",
+        }
+    )
+    return ds
+
+
+def netcdf_engine() -> str:
+    """``"h5netcdf"`` (NetCDF4) when its HDF5 backend ``h5py`` is importable, else ``"scipy"``
+    (NetCDF3; integers stored as int32)."""
+    try:
+        import h5netcdf  # noqa: F401
+        import h5py  # noqa: F401
+    except ImportError:
+        return "scipy"
+    return "h5netcdf"
+
+
+def frequency_markers(a: Assembled) -> dict[str, float]:
+    """Named frequencies [Hz] for plots: each shaft's speed (1x) and each mesh frequency."""
+    out = {f"{b} 1x": abs(s) * a.omega / (2 * math.pi) for b, s in a.plan.spin.items() if s}
+    for name, (_, _, n) in a.meshes.items():
+        out[f"{name} mesh"] = abs(n) * a.omega / (2 * math.pi)
+    return out
+
+
+def write_dataset(ds: xr.Dataset, path: str | Path) -> Path:
+    """Write NetCDF atomically: temporary file, then rename (see :func:`netcdf_engine`)."""
+    engine = netcdf_engine()
+    out = ds
+    if engine == "scipy":  # NetCDF3 has no int64
+        out = ds.copy()
+        for name, var in list(out.variables.items()):
+            if var.dtype == np.int64:
+                out[name] = var.astype(np.int32)
+    with atomic_write(path) as tmp:
+        out.to_netcdf(tmp, engine=engine)  # type: ignore[call-overload]
+    return Path(path)

@@ -1,0 +1,124 @@
+"""Results over speed: one amplitude spectrum per speed (radial, single-sided ``2|x_n|``).
+
+The harmonic set is fixed in orders of the input speed (closure with ``max_order``), so every
+speed shares the same ``harmonic`` indices; ``frequency`` is a ``(speed, harmonic)`` coordinate.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from .. import __version__
+from ..mechanics.model import Model
+from .compute import OperatingPoint, solve_point
+from .dataset import complex_values, frequency_markers, point_dataset
+
+__all__ = ["sweep_dataset", "sweep_speeds"]
+
+
+def _amplitudes(ds: xr.Dataset) -> dict[str, Any]:
+    two = xr.where(ds["harmonic"] > 0, 2.0, 1.0)
+    q = complex_values(ds["displacement"])
+    out = {"response": np.hypot(np.abs(q.sel(component="ux")), np.abs(q.sel(component="uy")))}
+    out["response"] = out["response"] * two
+    if "bearing_force" in ds:
+        F = complex_values(ds["bearing_force"])
+        Fr = np.hypot(np.abs(F.sel(force_component="Fx")), np.abs(F.sel(force_component="Fy")))
+        out["bearing_force"] = Fr * two
+    if "dte" in ds:
+        out["dte"] = np.abs(complex_values(ds["dte"])) * two
+    return out
+
+
+def sweep_speeds(
+    model: Model,
+    speeds: Sequence[float],
+    *,
+    progress: Callable[[int, OperatingPoint], None] | None = None,
+    **options: Any,
+) -> xr.Dataset:
+    """Solve at every input speed [rad/s] and collect amplitude spectra (see :func:`solve_point`).
+
+    >>> from rheolin.io import load_model
+    >>> from rheolin.data import example_path
+    >>> ds = sweep_speeds(load_model(example_path("rotor")), [100.0, 200.0], stability=False)
+    >>> ds["response"].dims, ds["success"].values.tolist()
+    (('speed', 'harmonic', 'node'), [1, 1])
+    """
+    points = []
+    for i, w in enumerate(speeds):
+        p = solve_point(model, float(w), **options)
+        points.append(_reduce(p))
+        if progress is not None:
+            progress(i, p)
+    return sweep_dataset(points, options)
+
+
+def _reduce(p: OperatingPoint) -> dict[str, Any]:
+    ds = point_dataset(p)
+    s = p.solution
+    return dict(
+        speed=p.assembled.speed,
+        amps=_amplitudes(ds),
+        coords=ds.coords,
+        success=int(s.success),
+        status=int(s.status),
+        iterations=int(s.iterations),
+        residual=float(s.residual),
+        stable=-1 if s.stable is None else int(s.stable),
+        max_floquet_real=float("nan") if s.max_floquet_real is None else s.max_floquet_real,
+        method=s.method,
+        markers=frequency_markers(p.assembled),
+        base_ratio=float(p.assembled.base_ratio),
+    )
+
+
+def sweep_dataset(points: list[dict[str, Any]], options: dict[str, Any]) -> xr.Dataset:
+    """Stack reduced operating points into one Dataset over ``speed``."""
+    first = points[0]
+    speeds = np.array([p["speed"] for p in points])
+    data: dict[str, Any] = {}
+    for key, units in (("response", "m"), ("bearing_force", "N"), ("dte", "m")):
+        if key in first["amps"]:
+            dims = ("speed", *first["amps"][key].dims)
+            values = np.stack([p["amps"][key].values for p in points])
+            data[key] = (dims, values, {"units": units, "long_name": f"{key} amplitude"})
+    scalars = ("success", "status", "iterations", "residual", "stable", "max_floquet_real")
+    for key in scalars:
+        data[key] = ("speed", np.array([p[key] for p in points]))
+    data["stable"] = data["stable"] + ({"flag_values": "1 stable, 0 unstable, -1 not checked"},)
+    data["method"] = ("speed", np.array([p["method"] for p in points]))
+    harmonic = first["coords"]["harmonic"].values
+    w1_per_speed = first["base_ratio"]
+    coords: dict[str, Any] = {
+        "speed": ("speed", speeds, {"units": "rad/s"}),
+        "speed_rpm": ("speed", speeds * 30 / math.pi, {"units": "rpm"}),
+        "harmonic": ("harmonic", harmonic),
+        "order": ("harmonic", harmonic * w1_per_speed, {"units": "1"}),
+        "frequency": (
+            ("speed", "harmonic"),
+            np.outer(speeds, harmonic) * w1_per_speed / (2 * math.pi),
+            {"units": "Hz"},
+        ),
+    }
+    for name in ("node", "body", "bearing", "mesh"):
+        if name in first["coords"]:
+            c = first["coords"][name]
+            coords[name] = (c.dims[0], c.values)
+    ds = xr.Dataset(data, coords=coords)
+    orders = {k: v / (first["speed"] / (2 * math.pi)) for k, v in first["markers"].items()}
+    ds.attrs.update(
+        rheolin_version=__version__,
+        method=str(options.get("method", "auto")),
+        closure_order=int(options.get("order", 2)),
+        max_order=float(options.get("max_order") or 0.0),
+        marker_orders_json=json.dumps(orders),
+        convention="single-sided amplitudes 2|x_n| (|x_0| for the mean); radial = hypot(x, y)",
+    )
+    return ds

@@ -1,0 +1,189 @@
+"""The real CLI in a subprocess: results reopened with xarray and compared with the Python API;
+broken files refused with exit status 2 and a message naming the field; atomic writes."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from rheolin.data import example_text
+from rheolin.io import atomic_write, parse_model
+from rheolin.results import complex_values, solve_point
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "io"))
+from test_loader import SMALL, _broken
+
+ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "COLUMNS": "120"}
+
+
+@pytest.fixture(autouse=True)
+def _allow_underflow():
+    with np.errstate(under="ignore"):
+        yield
+
+
+def cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "rheolin.cli", *args],
+        capture_output=True,
+        text=True,
+        env=ENV,
+        cwd=cwd,
+        timeout=300,
+    )
+
+
+@pytest.fixture(scope="module")
+def small_run(tmp_path_factory):
+    d = tmp_path_factory.mktemp("run")
+    (d / "model.toml").write_text(SMALL)
+    res = cli(
+        "run",
+        str(d / "model.toml"),
+        "--speed",
+        "2000rpm",
+        "--out",
+        str(d / "out"),
+        "--json",
+        "--stability",
+        "off",
+        "--harmonics",
+        "3",
+    )
+    return d, res
+
+
+def test_run_results_reopen_with_xarray_and_match_the_python_api(small_run):
+    d, res = small_run
+    assert res.returncode == 0, res.stderr
+    summary = json.loads(res.stdout)
+    assert summary["success"] == 1 and summary["stability"] == "not checked"
+    assert json.loads((d / "out" / "summary.json").read_text())["residual"] == summary["residual"]
+    ds = xr.open_dataset(d / "out" / "results.nc")
+    loaded = parse_model(SMALL)
+    p = solve_point(loaded.model, 2000 * np.pi / 30, order=3, stability=False)
+    ref = p.solution
+    assert ds.attrs["model_sha256"] == loaded.sha256
+    assert ds.attrs["method"] == ref.method and ds.attrs["iterations"] == ref.iterations
+    assert np.isclose(ds.attrs["residual"], ref.residual, rtol=1e-3, atol=1e-14)
+    assert ds["frequency"].attrs["units"] == "Hz"
+    assert np.allclose(ds["order"], ds["harmonic"] * float(p.assembled.base_ratio))
+    q = complex_values(ds["displacement"].sel(node="b:1", component=["ux", "uy"]))
+    dofs = p.assembled.dofs("b", 1)[:2]
+    expected = np.array([ref.harmonic(int(n))[dofs] for n in ds["harmonic"].values])
+    assert np.allclose(q.values, expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max())
+    from rheolin.mechanics.outputs import bearing_forces, transmission_errors
+
+    F = complex_values(ds["bearing_force"].sel(bearing="a2"))
+    rows = bearing_forces(ref, p.assembled, "a2")
+    assert np.allclose(F.values, [r.value for r in rows], atol=1e-9 * abs(F.values).max())
+    E = complex_values(ds["dte"].sel(mesh="mesh"))
+    rows = transmission_errors(ref, p.assembled, "mesh")
+    assert np.allclose(E.values, [r.value[0] for r in rows], atol=1e-9 * abs(E.values).max())
+
+
+def test_run_writes_plots_and_no_temporary_files(small_run):
+    d, _ = small_run
+    names = sorted(p.name for p in (d / "out").iterdir())
+    expected = ["bearing_forces.png", "convergence.png", "orbits.png", "results.nc"]
+    assert names == sorted([*expected, "spectrum.png", "summary.json"])
+    for name in names:
+        if name.endswith(".png"):
+            assert (d / "out" / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+BROKEN = [
+    (_broken('outer_diameter = "30 mm"', 'outer_diametr = "30 mm"'), "shafts[0].outer_diametr"),
+    (_broken('stiffness = "3e8 N/m"', 'stiffness = "3e8 N*m"'), "meshes[0].stiffness"),
+    (_broken('name = "a2"\nnode = 2', 'name = "a2"\nnode = 9'), "shafts[0].bearings[1].node"),
+    (_broken("gear_teeth = 40", "gear_teeth = 45"), "meshes[0].gear_teeth"),
+    (_broken('gear_body = "b"', 'gear_body = "nope"'), "meshes[0].gear_body"),
+    ("[model\nspeed = 1", "not valid TOML"),
+]
+
+
+@pytest.mark.parametrize(("text", "field"), BROKEN, ids=[b[1] for b in BROKEN])
+def test_broken_files_exit_2_naming_the_field(tmp_path, text, field):
+    path = tmp_path / "broken.toml"
+    path.write_text(text)
+    command = ["run", str(path), "--out", str(tmp_path / "o")] if "TOML" in field else []
+    res = cli(*(command or ["validate", str(path)]))
+    assert res.returncode == 2, (res.stdout, res.stderr)
+    assert field in res.stderr and "Traceback" not in res.stderr
+    assert not (tmp_path / "o").exists()
+
+
+def test_example_validate_and_bad_options(tmp_path):
+    res = cli("example", "gearbox")
+    assert res.returncode == 0 and res.stdout == example_text("gearbox")
+    (tmp_path / "g.toml").write_text(res.stdout)
+    res = cli("validate", str(tmp_path / "g.toml"))
+    assert res.returncode == 0 and "valid" in res.stdout and "1/4757" in res.stdout
+    assert cli("example", "nope").returncode == 2
+    bad = [("--method", "nope"), ("--speed", "3000 kg"), ("--harmonics", "-1")]
+    for opt, value in bad:
+        res = cli("run", str(tmp_path / "g.toml"), opt, value, "--out", str(tmp_path / "x"))
+        assert res.returncode == 2 and opt in res.stderr, (opt, res.stderr)
+    for command in ("run", "sweep"):
+        res = cli(command, "--help")
+        assert res.returncode == 0 and "Usage" in res.stdout
+    assert "Exit codes" in cli("--help").stdout
+
+
+def test_sweep_writes_results_over_speed(tmp_path):
+    res = cli("example", "rotor")
+    (tmp_path / "r.toml").write_text(res.stdout)
+    res = cli(
+        "sweep",
+        str(tmp_path / "r.toml"),
+        "--speeds",
+        "1000:3000:1000rpm",
+        "--out",
+        str(tmp_path / "s"),
+        "--stability",
+        "off",
+        "--no-stability-map",
+    )
+    assert res.returncode == 0, res.stderr
+    ds = xr.open_dataset(tmp_path / "s" / "sweep.nc")
+    assert np.allclose(ds["speed_rpm"], [1000, 2000, 3000])
+    assert ds["response"].dims == ("speed", "harmonic", "node")
+    assert (ds["success"] == 1).all() and (ds["stable"] == -1).all()
+    m = parse_model((tmp_path / "r.toml").read_text()).model
+    ref = solve_point(m, 2000 * np.pi / 30, order=4, stability=False).solution
+    amp = 2 * np.abs(ref.harmonic(1)[6:8])  # node rotor:1, ux and uy
+    got = float(ds["response"].sel(speed=2000 * np.pi / 30, harmonic=1, node="rotor:1"))
+    assert np.isclose(got, np.hypot(*amp), rtol=1e-6)
+    table = json.loads((tmp_path / "s" / "sweep.json").read_text())
+    assert table["stable"] == [None, None, None]
+    assert (tmp_path / "s" / "sweep.png").stat().st_size > 10000
+
+
+def _has_campbell() -> bool:
+    try:
+        return hasattr(importlib.import_module("rheolin.stability"), "campbell")
+    except ImportError:
+        return False
+
+
+@pytest.mark.skipif(_has_campbell(), reason="rheolin.stability.campbell is installed")
+def test_campbell_without_the_stability_package_exits_2(tmp_path):
+    res = cli("campbell", "whatever.toml", "--speeds", "0:100:10rpm")
+    assert res.returncode == 2 and "rheolin.stability" in res.stderr
+
+
+def test_atomic_write_leaves_old_file_on_interruption(tmp_path):
+    target = tmp_path / "results.nc"
+    target.write_text("old")
+    with pytest.raises(KeyboardInterrupt), atomic_write(target) as tmp:
+        tmp.write_text("half")
+        raise KeyboardInterrupt
+    assert target.read_text() == "old" and [p.name for p in tmp_path.iterdir()] == ["results.nc"]
