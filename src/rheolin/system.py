@@ -105,16 +105,17 @@ class PeriodicSystem:
     def _infer_size(*coeffs: Mapping[int, Any] | None) -> int:
         names = ("M", "D", "K", "f")
         for name, c in zip(names, coeffs, strict=True):
-            if c is None:
-                continue
-            if not isinstance(c, Mapping):
+            if c is not None and not isinstance(c, Mapping):
                 raise ModelError(
                     f"`{name}` must be a dict mapping harmonic index k to a "
                     f"{'vector' if name == 'f' else 'matrix'}, got {type(c).__name__}"
                 )
-            for v in c.values():
-                shape = np.shape(v) if not _is_sparse(v) else v.shape
-                if len(shape) >= 1 and shape[0] > 0:
+        for c in coeffs:
+            for v in (c or {}).values():
+                shape = v.shape if _is_sparse(v) else np.shape(v)
+                if len(shape) == 0:
+                    return 1  # a scalar coefficient: a one-DOF system
+                if shape[0] > 0:
                     return int(shape[0])
         raise ModelError("cannot infer the system size: give at least one of M, D, K")
 

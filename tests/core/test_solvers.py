@@ -1,0 +1,171 @@
+"""Every method on the shared catalogue (``cases.py``), plus argument errors and ``auto``."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+from cases import CASES, METHODS, Case, gravity_rotor
+
+import rheolin as rl
+
+
+def _rel(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.linalg.norm(a - b) / np.linalg.norm(b))
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("case", CASES, ids=lambda c: c.name)
+def test_catalogue(case: Case, method: str) -> None:
+    system = case.system()
+    if method == "lti" and not case.time_invariant:
+        with pytest.raises(ValueError, match="lti"):
+            rl.solve(system, case.harmonics, method="lti")
+        return
+    rtol = 1e-10
+    sol = rl.solve(system, case.harmonics, method=method, rtol=rtol)
+    assert sol.method == method
+    assert np.array_equal(sol.harmonics, case.harmonics.indices)
+    if method in case.converge:
+        assert sol.success, sol.message
+        assert sol.status == 0
+        assert sol.residual <= rtol, sol.residual
+        assert sol.stable is True  # small systems: solve checks Floquet stability by default
+        ref = case.reference(sol.harmonics)
+        assert _rel(sol.q, ref) < case.ref_tol
+        # a real response: q_{-n} = conj(q_n)
+        np.testing.assert_allclose(sol.q[::-1], np.conj(sol.q), rtol=0, atol=1e-14 * abs(ref).max())
+        if method == "gmres":
+            hist = np.asarray(sol.history)
+            assert sol.iterations == hist.size
+            if case.time_invariant:
+                assert sol.iterations <= 1  # dA = 0: the preconditioner is the inverse
+            else:
+                assert sol.iterations >= 1
+                assert np.all(np.diff(hist) <= 1e-12 * hist[0]), hist  # minimal residual
+                assert hist[-1] <= rtol
+        if method == "perturbation":
+            assert sol.history[-1] <= rtol
+    else:
+        allowed = case.fail[method]
+        assert not sol.success, sol.message
+        assert sol.status in allowed, (sol.status, sol.message)
+        assert sol.message
+        if sol.status == 4:
+            # the solution exists and solves the truncated system; only its physics is wrong
+            assert sol.stable is False and sol.max_floquet_real > 0
+            assert _rel(sol.q, case.reference(sol.harmonics)) < case.ref_tol
+
+
+def test_gravity_case_gmres_few_iterations_and_perturbation_contraction() -> None:
+    """DESIGN.md §3: at half the critical speed the perturbation contraction factor is
+    ``rho = sqrt(eps^2 / (2 zeta)) = 1.414`` although the rotor is stable; GMRES needs < 10."""
+    system = gravity_rotor().system()
+    sol = rl.solve(system, 16, method="gmres")
+    assert sol.success and sol.iterations < 10, sol
+    pert = rl.solve(system, 16, method="perturbation", maxiter=200)
+    assert not pert.success and pert.status in (1, 2)
+    # Residuals grow by rho^2 = 2 every second iteration (q_0 -> q_{±2} -> q_0)
+    h = np.asarray(pert.history)
+    two_step = h[2:] / h[:-2]
+    assert np.allclose(two_step[-4:], 2.0, rtol=0.05), two_step
+
+
+def test_gravity_case_auto_uses_gmres() -> None:
+    system = gravity_rotor().system()
+    sol = rl.solve(system, 16)
+    assert sol.success and sol.method == "gmres"
+
+
+def test_auto_time_invariant_uses_lti() -> None:
+    from cases import chain_reference, chain_system
+
+    sol = rl.solve(chain_system(), 4)
+    assert sol.success and sol.method == "lti"
+    assert _rel(sol.q, chain_reference(sol.harmonics)) < 1e-12
+
+
+def test_unstable_band_reports_floquet_growth() -> None:
+    """Inside the band the rotating-frame equation has a real positive exponent: compare
+    ``max_floquet_real`` with the closed-form eigenvalues of the rotating-frame system."""
+    from cases import JEFFCOTT_INSIDE, Jeffcott
+
+    rotor = Jeffcott(W=JEFFCOTT_INSIDE)
+    sol = rl.solve(rotor.system(), 5, method="gmres")
+    assert sol.status == 4 and sol.stable is False
+    # rotating frame: m xi'' + (c I + 2 m W J) xi' + (diag(kx, ky) - m W^2 I + c W J) xi = 0,
+    # J = [[0, -1], [1, 0]] (time invariant): eigenvalues by a companion matrix.
+    m, c, W = rotor.m, rotor.c, rotor.W
+    J = np.array([[0.0, -1.0], [1.0, 0.0]])
+    Kr = np.diag([rotor.kx, rotor.ky]) - m * W**2 * np.eye(2) + c * W * J
+    Dr = c * np.eye(2) + 2 * m * W * J
+    A = np.block([[np.zeros((2, 2)), np.eye(2)], [-Kr / m, -Dr / m]])
+    growth = np.linalg.eigvals(A).real.max()
+    assert growth > 0
+    assert sol.max_floquet_real == pytest.approx(growth, rel=1e-8)
+
+
+def test_callback_and_maxiter() -> None:
+    system = gravity_rotor().system()
+    seen: list[tuple[int, float]] = []
+    sol = rl.solve(system, 16, method="gmres", callback=lambda i, r: seen.append((i, r)))
+    assert [r for _, r in seen] == sol.history
+    capped = rl.solve(system, 16, method="gmres", maxiter=2, rtol=1e-14)
+    assert not capped.success and capped.status == 1 and capped.iterations <= 2
+
+
+def test_singular_time_averaged_system_is_status_3() -> None:
+    """Undamped oscillator forced exactly at resonance: ``A0(1)`` is singular."""
+    s = rl.PeriodicSystem(2.0, M={0: np.eye(1)}, K={0: 4.0 * np.eye(1)}, f={1: np.ones(1)})
+    sol = rl.solve(s, 2, method="lti")
+    assert not sol.success and sol.status == 3
+
+
+def test_zero_load_gives_zero_response() -> None:
+    s = rl.PeriodicSystem(1.0, M={0: np.eye(2)}, K={0: np.eye(2)})
+    sol = rl.solve(s, 3, method="lti")
+    assert sol.success and not sol.q.any()
+
+
+# --------------------------------------------------------------------------- argument errors
+def _small() -> rl.PeriodicSystem:
+    return rl.PeriodicSystem(
+        1.0, M={0: np.eye(2)}, D={0: 0.1 * np.eye(2)}, K={0: np.eye(2)}, f={1: np.ones(2)}
+    )
+
+
+def test_lti_refuses_time_varying_system() -> None:
+    s = rl.PeriodicSystem(
+        1.0, M={0: np.eye(1)}, K={0: np.eye(1), 2: 0.1 * np.eye(1)}, f={1: np.ones(1)}
+    )
+    with pytest.raises(ValueError, match=re.escape("method='lti'")):
+        rl.solve(s, 3, method="lti")
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"method": "newton"}, "`method`"),
+        ({"method": None}, "`method`"),
+        ({"rtol": 0.0}, "`rtol`"),
+        ({"rtol": 1.5}, "`rtol`"),
+        ({"rtol": -1e-8}, "`rtol`"),
+        ({"rtol": "1e-8"}, "`rtol`"),
+        ({"maxiter": 0}, "`maxiter`"),
+    ],
+)
+def test_solve_bad_options(kwargs: dict, match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        rl.solve(_small(), 3, **kwargs)
+
+
+@pytest.mark.parametrize("harmonics", [[], [0.5, 1], "abc", -1, True])
+def test_solve_bad_harmonics(harmonics: object) -> None:
+    with pytest.raises(ValueError, match=r"harmonics|`N`"):
+        rl.solve(_small(), harmonics)
+
+
+def test_solve_bad_system() -> None:
+    with pytest.raises(TypeError, match="`system`"):
+        rl.solve({"M": 1}, 3)  # type: ignore[arg-type]
