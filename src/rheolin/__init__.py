@@ -5,7 +5,7 @@ Linearized equations with time-periodic ("rheo-linear") coefficients,
 
 >>> import rheolin as rl
 >>> sorted(rl.METHODS)
-['direct', 'gmres', 'lti', 'perturbation']
+['direct', 'gmres', 'lti', 'perturbation', 'transient']
 """
 
 import logging

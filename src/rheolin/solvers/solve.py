@@ -13,7 +13,7 @@ from ..harmonics import HarmonicSet, as_harmonic_set
 from ..operator import HarmonicBalance, SingularBlockError
 from ..solution import Solution
 from ..system import PeriodicSystem
-from . import direct, krylov, lti, perturbation  # noqa: F401  (register the methods)
+from . import direct, krylov, lti, perturbation, transient  # noqa: F401  (register the methods)
 from .registry import METHODS, RESIDUAL_CHECKED, Options, SolverOutcome
 
 __all__ = ["AUTO_STABILITY_SIZE", "solve", "stability_harmonics"]
@@ -49,8 +49,8 @@ def solve(
         The harmonic set: an int ``N`` (``-N..N``), an iterable of ints, or a
         :class:`~rheolin.HarmonicSet`.
     method
-        ``"auto"``, ``"lti"``, ``"perturbation"``, ``"gmres"`` or ``"direct"``
-        (DESIGN.md §3).
+        ``"auto"``, ``"lti"``, ``"perturbation"``, ``"gmres"``, ``"direct"`` (DESIGN.md §3),
+        or ``"transient"`` (BDF time integration from rest until periodic: the baseline).
     rtol
         Relative residual ``||f - A q|| / ||f||`` to reach (iterative methods).
     maxiter
