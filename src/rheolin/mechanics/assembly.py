@@ -7,7 +7,7 @@ triplets per (matrix, harmonic) and returns SciPy CSR matrices. Never dense ``N 
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
@@ -183,6 +183,11 @@ def assemble_model(model: Model, speed: float) -> Assembled:
         s = plan.spin[b.name]
         if b.kind == "shaft":
             terms += _shaft_terms(b, s, w1, node_index[(b.name, 0)])
+        elif b.kind == "condensed":
+            local = b.data["condensed"]
+            first = node_index[(b.name, 0)]
+            placed = replace(local, nodes=[first + i for i in local.nodes])
+            terms.append(placed.term(b.axis, s, w1))
         for i, rn in b.disks.items():
             terms.append(rn.term(node_index[(b.name, i)], b.axis, s, w1))
     joints: dict[str, Term] = {}

@@ -30,6 +30,7 @@ import numpy as np
 
 from ..errors import ModelError
 from .assembly import Assembled, assemble_model, model_speed_plan
+from .condensed import CondensedBody, load_condensed
 from .gears import rectangular_wave_coefficients
 from .joints import expand_matrix
 from .rigid import RigidNode, disk, static_unbalance
@@ -44,7 +45,7 @@ __all__ = ["Assembled", "Model"]
 @dataclass
 class _Body:
     name: str
-    kind: str  # "shaft" | "rigid"
+    kind: str  # "shaft" | "rigid" | "condensed"
     axis: np.ndarray
     positions: np.ndarray  # (n_nodes, 3)
     speed_ratio: Fraction | None
@@ -166,6 +167,48 @@ class Model:
         ratio = None if speed_ratio is None else Fraction(speed_ratio)
         self.bodies[name] = _Body(name, "rigid", e, pts, ratio)
         self.bodies[name].disks[0] = RigidNode(mass, np.asarray(inertia, dtype=float))
+
+    def add_condensed_body(
+        self,
+        name: str,
+        positions: Sequence[Sequence[float]] | np.ndarray,
+        M: Any = None,
+        K: Any = None,
+        D: Any = None,
+        G: Any = None,
+        frame: Sequence[Sequence[float]] | np.ndarray | None = None,
+        path: str | None = None,
+        axis: Sequence[float] = (0.0, 0.0, 1.0),
+        speed_ratio: Fraction | int | None = None,
+    ) -> None:
+        """A body given by condensed matrices in body axes (e.g. from an FE reduction).
+
+        ``M``, ``K`` (and optional rotating damping ``D``, gyroscopic matrix per unit speed
+        ``G``) are ``6 n x 6 n`` over the body's ``n`` nodes at ``positions`` (node-major,
+        DOFs ``ux, uy, uz, phix, phiy, phiz``); ``frame`` holds the body axes as columns at
+        ``t = 0``. Or give ``path``: a ``.npz`` with arrays ``M, K`` and optionally
+        ``D, G, frame`` (read by :func:`~rheolin.mechanics.condensed.load_condensed`).
+
+        >>> import numpy as np
+        >>> m = Model()
+        >>> m.add_condensed_body("housing", [[0, 0, 0]], M=10 * np.eye(6), K=np.zeros((6, 6)))
+        >>> m.bodies["housing"].kind
+        'condensed'
+        """
+        self._new_body(name)
+        pts = np.asarray(positions, dtype=float).reshape(-1, 3)
+        nodes = list(range(len(pts)))  # body-local; the assembly maps them to global nodes
+        if path is not None:
+            if M is not None or K is not None:
+                raise ModelError("give either `path` or the matrices `M`, `K`, not both")
+            body = load_condensed(path, nodes=nodes, frame=frame)
+        else:
+            if M is None or K is None:
+                raise ModelError("a condensed body needs `M` and `K` (or a `path`)")
+            body = CondensedBody(M=M, K=K, nodes=nodes, D=D, G=G, frame=frame)
+        ratio = None if speed_ratio is None else Fraction(speed_ratio)
+        e = unit_axis(axis, "axis")
+        self.bodies[name] = _Body(name, "condensed", e, pts, ratio, {"condensed": body})
 
     def add_disk(
         self,
