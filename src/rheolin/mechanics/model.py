@@ -198,14 +198,15 @@ class Model:
         self._new_body(name)
         pts = np.asarray(positions, dtype=float).reshape(-1, 3)
         nodes = list(range(len(pts)))  # body-local; the assembly maps them to global nodes
+        axes = None if frame is None else np.asarray(frame, dtype=float)
         if path is not None:
             if M is not None or K is not None:
                 raise ModelError("give either `path` or the matrices `M`, `K`, not both")
-            body = load_condensed(path, nodes=nodes, frame=frame)
+            body = load_condensed(path, nodes=nodes, frame=axes)
         else:
             if M is None or K is None:
                 raise ModelError("a condensed body needs `M` and `K` (or a `path`)")
-            body = CondensedBody(M=M, K=K, nodes=nodes, D=D, G=G, frame=frame)
+            body = CondensedBody(M=M, K=K, nodes=nodes, D=D, G=G, frame=axes)
         ratio = None if speed_ratio is None else Fraction(speed_ratio)
         e = unit_axis(axis, "axis")
         self.bodies[name] = _Body(name, "condensed", e, pts, ratio, {"condensed": body})
