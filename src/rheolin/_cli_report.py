@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from .errors import ModelError
@@ -83,7 +84,7 @@ def print_summary(console: Console, s: dict[str, Any], seconds: float) -> None:
     console.print(
         f"method {s['method']} (asked: {s['requested_method']}), {s['iterations']} iterations, "
         f"residual {s['residual']:.2e}: {ok}; {s['harmonic_count']} harmonics x "
-        f"{s['n_dof']} DOF, {seconds:.2f} s"
+        f"{s['n_dof']} DOF, solved in {seconds:.2f} s"
     )
     stab = s["stability"]
     colour = {"stable": "green", "unstable": "red"}.get(stab, "yellow")
@@ -93,7 +94,7 @@ def print_summary(console: Console, s: dict[str, Any], seconds: float) -> None:
         else f" (max Floquet real part {s['max_floquet_real']:.3g} 1/s)"
     )
     console.print(f"stability: [{colour}]{stab}[/{colour}]{extra}")
-    console.print(f"[dim]{s['message']}[/dim]")
+    console.print(f"[dim]{escape(str(s['message']))}[/dim]")
     t = Table(title="Largest responses per body (radial, single-sided amplitude)")
     for col in ("body", "node", "static", "dynamic (sum)", "largest harmonics"):
         t.add_column(col)
@@ -108,7 +109,7 @@ def print_summary(console: Console, s: dict[str, Any], seconds: float) -> None:
     console.print(t)
     if "bearings" in s:
         t = Table(title="Bearing forces (radial)")
-        for col in ("bearing", "static [N]", "dynamic sum [N]", "largest harmonic"):
+        for col in ("bearing", "static (N)", "dynamic sum (N)", "largest harmonic"):
             t.add_column(col)
         for name, b in s["bearings"].items():
             h = b["largest_harmonics"][:1]

@@ -37,7 +37,7 @@ def _conj(x: Matrix) -> Matrix:
 
 def _close(a: Matrix, b: Matrix, scale: float) -> bool:
     diff = a - b
-    return _max_abs(diff) <= 1e-12 * max(scale, np.finfo(float).tiny)
+    return _max_abs(diff) <= (1e-12 * float(scale) if scale > 0 else 0.0)
 
 
 class PeriodicSystem:

@@ -3,7 +3,6 @@ broken files refused with exit status 2 and a message naming the field; atomic w
 
 from __future__ import annotations
 
-import importlib
 import json
 import os
 import subprocess
@@ -14,6 +13,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from rheolin.cli import MAP_PRECISION
 from rheolin.data import example_text
 from rheolin.io import atomic_write, parse_model
 from rheolin.results import complex_values, solve_point
@@ -167,17 +167,122 @@ def test_sweep_writes_results_over_speed(tmp_path):
     assert (tmp_path / "s" / "sweep.png").stat().st_size > 10000
 
 
-def _has_campbell() -> bool:
-    try:
-        return hasattr(importlib.import_module("rheolin.stability"), "campbell")
-    except ImportError:
-        return False
+OVERHUNG = """
+[model]
+name = "overhung disk"
+input_body = "rotor"
+
+[[shafts]]
+name = "rotor"
+positions = "0 250 mm"
+outer_diameter = "30 mm"
+elastic_modulus = "210 GPa"
+poisson_ratio = 0.3
+density = "0 kg/m^3"
+
+[[shafts.disks]]
+node = 1
+mass = "8 kg"
+inertia = ["0.04 kg*m^2", "0.04 kg*m^2", "0.07 kg*m^2"]
+
+[[shafts.bearings]]
+name = "clamp"
+node = 0
+components = "all"
+stiffness = ["1e12 N/m", "1e12 N/m", "1e12 N/m", "1e12 N*m/rad", "1e12 N*m/rad", "1e12 N*m/rad"]
+"""
 
 
-@pytest.mark.skipif(_has_campbell(), reason="rheolin.stability.campbell is installed")
-def test_campbell_without_the_stability_package_exits_2(tmp_path):
-    res = cli("campbell", "whatever.toml", "--speeds", "0:100:10rpm")
-    assert res.returncode == 2 and "rheolin.stability" in res.stderr
+def test_campbell_writes_the_gyroscopic_split_and_critical_speeds(tmp_path):
+    """The overhung disk of tests/stability/test_campbell.py written as a model file: the
+    forward/backward frequencies in campbell.nc solve the closed-form whirl quartic."""
+    sys.path.insert(0, str(Path(__file__).parents[1] / "stability"))
+    from test_campbell import JP, JT, M, _tip_stiffness, _whirl_frequencies
+
+    (tmp_path / "o.toml").write_text(OVERHUNG)
+    res = cli(
+        "campbell",
+        str(tmp_path / "o.toml"),
+        "--speeds",
+        "400:3000:25rad/s",
+        "--out",
+        str(tmp_path / "c"),
+    )
+    assert res.returncode == 0, res.stderr
+    ds = xr.open_dataset(tmp_path / "c" / "campbell.nc")
+    assert np.allclose(ds["speed"], np.arange(400, 3001, 25))
+    for W in (500.0, 3000.0):
+        row = ds.sel(speed=W)
+        for sign, kind in ((+1, "forward"), (-1, "backward")):
+            got = np.sort(row["frequency"].values[row["whirl"].values == kind])
+            np.testing.assert_allclose(got, _whirl_frequencies(W, sign), rtol=1e-8)
+    # the forward 1x critical speed: (k11 - m W^2)(k22 - (J_t - J_p) W^2) = k12^2
+    (k11, k12), (_, k22) = _tip_stiffness()
+    x = np.roots(np.polysub(np.polymul([-M, k11], [JP - JT, k22]), [k12**2]))
+    ref = np.sqrt(x.real[(x.real > 0) & (np.abs(x.imag) < 1e-9)]).min()
+    fwd = (ds["critical_order"] == "1x rotor") & (ds["critical_whirl"] == "forward")
+    assert float(ds["critical_speed"][fwd].min()) == pytest.approx(ref, rel=2e-3)
+    assert "critical speeds" in res.stdout
+    assert (tmp_path / "c" / "campbell.png").stat().st_size > 10000
+
+
+RIGID_BAND = """
+[model]
+name = "rigid rotor on a spring fixed in its own axes"
+input_body = "r"
+
+[[rigid_bodies]]
+name = "r"
+position = "0 0 0 m"
+mass = "1 kg"
+inertia = ["1 kg*m^2", "1 kg*m^2", "1 kg*m^2"]
+
+[[rigid_bodies.disks]]
+node = 0
+unbalance = "1e-6 kg*m"
+
+[[rigid_bodies.bearings]]
+name = "spring"
+node = 0
+components = ["ux", "uy"]
+stiffness = ["1e4 N/m", "1.21e4 N/m"]
+frame = "r"
+
+[[rigid_bodies.bearings]]
+name = "ground"
+node = 0
+components = ["uz", "phix", "phiy", "phiz"]
+stiffness = ["1e4 N/m", "1e4 N*m/rad", "1e4 N*m/rad", "1e4 N*m/rad"]
+damping = ["1 N*s/m", "1 N*m*s/rad", "1 N*m*s/rad", "1 N*m*s/rad"]
+"""
+
+
+def test_sweep_stability_map_finds_the_asymmetric_band(tmp_path):
+    """A spring fixed in the rotor's axes with k_x != k_y: unstable exactly between
+    sqrt(k_x/m) = 100 and sqrt(k_y/m) = 110 rad/s (no damping in the plane)."""
+    (tmp_path / "b.toml").write_text(RIGID_BAND)
+    res = cli(
+        "sweep",
+        str(tmp_path / "b.toml"),
+        "--speeds",
+        "900:1100:50rpm",
+        "--out",
+        str(tmp_path / "s"),
+        "--stability",
+        "off",
+    )
+    # the forced response exists at every speed, but the sweep still reports the band
+    assert res.returncode == 0, res.stderr
+    table = json.loads((tmp_path / "s" / "sweep.json").read_text())
+    (band,) = table["unstable_ranges"]
+    # bounds refined by Brent's method to the sweep's stated precision
+    assert band["lower_rpm"] == pytest.approx(100 * 30 / np.pi, rel=MAP_PRECISION)
+    assert band["upper_rpm"] == pytest.approx(110 * 30 / np.pi, rel=MAP_PRECISION)
+    assert band["mechanism"] == "asymmetric shaft band" and not band["open_above"]
+    smap = xr.open_dataset(tmp_path / "s" / "stability_map.nc")
+    inside = (smap["speed"] > 100) & (smap["speed"] < 110)
+    assert (smap["stable"] == ~inside).all()
+    assert (tmp_path / "s" / "stability_map.png").stat().st_size > 10000
 
 
 def test_atomic_write_leaves_old_file_on_interruption(tmp_path):

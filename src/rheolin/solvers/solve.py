@@ -124,6 +124,11 @@ def _check_stability(system: PeriodicSystem, sol: Solution, stability: bool | No
         return sol
     res = floquet(system, stability_harmonics(system))
     sol.stable, sol.max_floquet_real = res.stable, res.max_real
+    if not res.converged:
+        sol.message += (
+            f"; the Hill truncation ({len(stability_harmonics(system))} harmonics) did not "
+            "converge for every Floquet exponent: the stability verdict is uncertain"
+        )
     if not res.stable and sol.success:
         sol.success, sol.status = False, 4
         sol.message += (

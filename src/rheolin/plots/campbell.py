@@ -1,0 +1,136 @@
+"""Campbell diagram plot: frequencies and damping of the averaged modes against speed."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._common import new_figure, save
+
+__all__ = ["plot_campbell"]
+
+RPM = 60.0 / (2.0 * np.pi)  # rad/s -> rpm
+HZ = 1.0 / (2.0 * np.pi)  # rad/s -> Hz
+_COLORS = {"forward": "tab:blue", "backward": "tab:red", "mixed": "tab:purple", "none": "0.45"}
+
+
+def plot_campbell(result: Any, path: str | Path, fmax_hz: float | None = None) -> Path:
+    """Campbell diagram as a PNG.
+
+    Top: damped natural frequencies [Hz] against input speed [rpm], one marker per mode and
+    speed, coloured by whirl (forward blue, backward red, mixed purple, no whirl grey); order
+    lines dashed (mesh orders red) and critical speeds circled (filled for forward whirl).
+    Bottom: damping ratio of every branch (a negative value is a growing mode of the
+    averaged system).
+
+    Parameters
+    ----------
+    result
+        A :class:`~rheolin.stability.CampbellResult`.
+    path
+        PNG file to write.
+    fmax_hz
+        Upper frequency limit [Hz]. Default: 1.25 times the highest order line at the top
+        speed (at least up to the two lowest branches), so that the crossings are readable
+        and far, speed-independent modes (axial, torsional, housing) do not flatten them.
+        The damping panel shows the branches below this limit.
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, pathlib
+    >>> from rheolin.stability import CampbellResult
+    >>> W = np.linspace(10.0, 100.0, 4)
+    >>> r = CampbellResult(W, np.tile([50.0, 60.0], (4, 1)), np.full((4, 2), 0.01),
+    ...                    np.full((4, 2), 0.06), np.tile([1.0, -1.0], (4, 1)), {"1x s": 1.0})
+    >>> p = plot_campbell(r, pathlib.Path(tempfile.mkdtemp()) / "c.png")
+    >>> p.stat().st_size > 1000
+    True
+    """
+    fig, axes = new_figure(2, 1, (9, 8.5))
+    ax, axd = axes[0, 0], axes[1, 0]
+    rpm = np.asarray(result.speeds) * RPM
+    freq = np.asarray(result.frequency) * HZ
+    labels = np.asarray(result.whirl)
+    shown = set()
+    for kind, color in _COLORS.items():
+        mask = labels == kind
+        if not mask.any():
+            continue
+        speeds = np.broadcast_to(rpm[:, None], freq.shape)[mask]
+        ax.plot(
+            speeds,
+            freq[mask],
+            "o",
+            ms=3.5,
+            color=color,
+            label="no whirl" if kind == "none" else f"{kind} whirl",
+        )
+        shown.add(kind)
+    for j in range(freq.shape[1]):
+        ax.plot(rpm, freq[:, j], "-", lw=0.6, color="0.7", zorder=0)
+    fmax = _default_fmax(freq, result) if fmax_hz is None else float(fmax_hz)
+    for name, ratio in result.orders.items():
+        line = ratio * np.asarray(result.speeds) * HZ
+        color = "tab:red" if name.startswith("mesh") else "k"
+        ax.plot(rpm, line, "--", lw=0.9, color=color, alpha=0.6)
+        inside = np.nonzero(line <= fmax)[0]
+        if inside.size:
+            i = inside[-1]
+            ax.annotate(
+                name,
+                (rpm[i], line[i]),
+                fontsize=7,
+                color=color,
+                xytext=(2, 2),
+                textcoords="offset points",
+            )
+    for c in result.critical_speeds:
+        face = _COLORS.get(c.whirl, "0.45") if c.whirl == "forward" else "none"
+        ax.plot(c.speed * RPM, c.frequency * HZ, "o", ms=9, mfc=face, mec="k", mew=1.0, alpha=0.8)
+    ax.set_ylim(0.0, fmax)
+    ax.set_xlim(rpm[0], rpm[-1])
+    ax.set_xlabel("input speed [rpm]")
+    ax.set_ylabel("damped natural frequency [Hz]")
+    ax.set_title("Campbell diagram (time-averaged system); circles: critical speeds")
+    ax.grid(alpha=0.3)
+    if shown:
+        ax.legend(fontsize=8, loc="upper left")
+    zeta = np.asarray(result.damping_ratio)
+    below = np.nanmin(np.where(np.isfinite(freq), freq, np.inf), axis=0) <= fmax
+    zeta = zeta[:, below] if below.any() else zeta
+    for j in range(zeta.shape[1]):
+        axd.plot(rpm, zeta[:, j], "-o", ms=2.5, lw=0.8, label=f"mode {j}" if j < 10 else None)
+    axd.axhline(0.0, color="tab:red", lw=1.0)
+    finite = zeta[np.isfinite(zeta)]
+    if finite.size == 0 or np.abs(finite).max() < 1e-9:  # undamped: rounding noise only
+        axd.set_ylim(-0.01, 0.01)
+        axd.text(
+            0.5,
+            0.6,
+            "undamped (|damping ratio| < 1e-9)",
+            transform=axd.transAxes,
+            ha="center",
+            fontsize=9,
+            color="0.3",
+        )
+    axd.set_xlim(rpm[0], rpm[-1])
+    axd.set_xlabel("input speed [rpm]")
+    axd.set_ylabel("damping ratio [-]")
+    axd.grid(alpha=0.3)
+    if zeta.shape[1]:
+        axd.legend(fontsize=7, ncol=5, loc="best")
+    return save(fig, path)
+
+
+def _default_fmax(freq: np.ndarray, result: Any) -> float:
+    if not np.isfinite(freq).any():
+        return 1.0
+    top = float(np.nanmax(freq))
+    lines = [r * float(np.max(result.speeds)) * HZ for r in result.orders.values()]
+    if not lines:
+        return top * 1.08
+    lowest = np.sort(np.nanmax(np.where(np.isfinite(freq), freq, np.nan), axis=0))
+    floor = float(lowest[min(1, lowest.size - 1)]) * 1.1
+    return min(top * 1.08, max(1.25 * max(lines), floor))

@@ -1,0 +1,230 @@
+"""Campbell diagram: averaged-system modes against speed, order lines and critical speeds."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .modes import WHIRL_THRESHOLD, averaged_modes, whirl_ratio
+
+__all__ = ["CampbellResult", "CriticalSpeed", "campbell", "order_lines"]
+
+
+@dataclass(frozen=True)
+class CriticalSpeed:
+    """A crossing of a mode branch with an order line.
+
+    Attributes
+    ----------
+    order
+        Name of the order line (e.g. ``"1x shaft"``, ``"mesh mesh1"``).
+    mode
+        Branch index (modes sorted by frequency at every speed).
+    speed
+        Input speed [rad/s] at the crossing (linear interpolation between samples).
+    frequency
+        Frequency at the crossing [rad/s].
+    whirl
+        ``"forward"``, ``"backward"``, ``"mixed"`` or ``"none"`` at the crossing.
+    """
+
+    order: str
+    mode: int
+    speed: float
+    frequency: float
+    whirl: str
+
+
+@dataclass
+class CampbellResult:
+    """Campbell diagram data (see :func:`campbell`).
+
+    Attributes
+    ----------
+    speeds
+        Input speeds [rad/s], shape ``(n_speed,)``.
+    frequency, damping_ratio, log_decrement, whirl_ratio
+        Per speed and mode branch, shape ``(n_speed, n_modes)``; NaN where a branch has no
+        oscillatory mode. ``whirl_ratio`` is +1 forward, -1 backward, 0 no whirl.
+    whirl
+        Labels from ``whirl_ratio``: ``"forward"``, ``"backward"``, ``"mixed"``, ``"none"``.
+    orders
+        ``{name: frequency per unit input speed}`` of the order lines.
+    critical_speeds
+        Crossings of branches with order lines, by speed.
+    """
+
+    speeds: np.ndarray
+    frequency: np.ndarray
+    damping_ratio: np.ndarray
+    log_decrement: np.ndarray
+    whirl_ratio: np.ndarray
+    orders: dict[str, float]
+    critical_speeds: list[CriticalSpeed] = field(default_factory=list)
+
+    @property
+    def whirl(self) -> np.ndarray:
+        """Whirl labels, shape ``(n_speed, n_modes)``."""
+        return np.vectorize(_whirl_label, otypes=[object])(self.whirl_ratio)
+
+    def to_dataset(self) -> Any:
+        """The diagram as an ``xarray.Dataset`` (dims ``speed``, ``mode``, ``order``, ``critical``).
+
+        >>> import numpy as np
+        >>> r = CampbellResult(np.array([1.0, 2.0]), np.ones((2, 1)), np.zeros((2, 1)),
+        ...                    np.zeros((2, 1)), np.ones((2, 1)), {"1x s": 1.0})
+        >>> ds = r.to_dataset()
+        >>> ds["frequency"].dims, ds["order_ratio"].values.tolist()
+        (('speed', 'mode'), [1.0])
+        """
+        import xarray as xr
+
+        crit = self.critical_speeds
+        ds = xr.Dataset(
+            {
+                "frequency": (("speed", "mode"), self.frequency),
+                "damping_ratio": (("speed", "mode"), self.damping_ratio),
+                "log_decrement": (("speed", "mode"), self.log_decrement),
+                "whirl_ratio": (("speed", "mode"), self.whirl_ratio),
+                "whirl": (("speed", "mode"), self.whirl.astype(str)),
+                "order_ratio": (("order",), np.array(list(self.orders.values()), dtype=float)),
+                "critical_speed": (("critical",), np.array([c.speed for c in crit], float)),
+                "critical_frequency": (("critical",), np.array([c.frequency for c in crit], float)),
+                "critical_order": (("critical",), np.array([c.order for c in crit], dtype=str)),
+                "critical_mode": (("critical",), np.array([c.mode for c in crit], dtype=int)),
+                "critical_whirl": (("critical",), np.array([c.whirl for c in crit], dtype=str)),
+            },
+            coords={
+                "speed": self.speeds,
+                "mode": np.arange(self.frequency.shape[1]),
+                "order": np.array(list(self.orders), dtype=str),
+            },
+        )
+        ds["speed"].attrs["units"] = "rad/s"
+        ds["frequency"].attrs.update(units="rad/s", long_name="damped natural frequency")
+        ds.attrs["title"] = "Campbell diagram of the time-averaged system"
+        return ds
+
+
+def _whirl_label(r: float) -> str:
+    if not np.isfinite(r) or abs(r) < 1e-3:
+        return "none"
+    if r >= WHIRL_THRESHOLD:
+        return "forward"
+    if r <= -WHIRL_THRESHOLD:
+        return "backward"
+    return "mixed"
+
+
+def order_lines(model: Any, speed: float = 1.0) -> dict[str, float]:
+    """Order lines of a model, as frequency per unit input speed: ``1x`` and ``2x`` of every
+    rotating body and the mesh frequency of every gear mesh.
+
+    >>> from rheolin.mechanics import Model
+    >>> m = Model()
+    >>> m.add_rigid_body("rotor", (0, 0, 0), 1.0, (1.0, 1.0, 1.0))
+    >>> order_lines(m)
+    {'1x rotor': 1.0, '2x rotor': 2.0}
+    """
+    plan = model.speed_plan()
+    out: dict[str, float] = {}
+    for body, ratio in plan.ratios.items():
+        if ratio != 0:
+            out[f"1x {body}"] = float(abs(ratio)) * speed
+            out[f"2x {body}"] = 2 * float(abs(ratio)) * speed
+    for name, harmonic in zip(model.meshes, plan.mesh, strict=True):
+        out[f"mesh {name}"] = float(harmonic * plan.base) * speed
+    return out
+
+
+def campbell(
+    model: Any,
+    speeds_rad_s: Any,
+    *,
+    n_modes: int | None = None,
+    method: str = "auto",
+) -> CampbellResult:
+    """Campbell diagram of a :class:`~rheolin.mechanics.Model` over input speeds.
+
+    At every speed the model is assembled and the oscillatory modes of the time-averaged
+    system ``M_0 q'' + D_0 q' + K_0 q = 0`` (gyroscopic and circulatory terms included) are
+    computed; each mode gets its damped frequency, damping ratio, logarithmic decrement and
+    whirl direction (:func:`~rheolin.stability.modes.whirl_ratio`). Branches are the modes
+    sorted by frequency. Crossings of the branches with the order lines (:func:`order_lines`)
+    are the critical speeds.
+
+    Parameters
+    ----------
+    model
+        The model.
+    speeds_rad_s
+        Increasing input speeds [rad/s], > 0.
+    n_modes
+        Number of lowest modes kept (default: all for small models, 12 for large ones).
+    method
+        Eigen-solver for the averaged system: ``"auto"``, ``"dense"``, ``"sparse"``.
+
+    Examples
+    --------
+    A rigid rotor on isotropic bearings: translation modes at ``sqrt(k / m)`` cross the 1x
+    line there:
+
+    >>> import numpy as np
+    >>> from rheolin.mechanics import Model
+    >>> m = Model()
+    >>> m.add_rigid_body("rotor", (0, 0, 0), 1.0, (0.1, 0.1, 0.2))
+    >>> m.add_bearing("b", "rotor", 0, [1e4] * 5 + [0.0], [1.0] * 5 + [0.0], components=None)
+    >>> r = campbell(m, np.linspace(50, 150, 5))
+    >>> sorted({round(c.speed, 1) for c in r.critical_speeds if c.order == "1x rotor"})
+    [100.0]
+    """
+    speeds = np.asarray(speeds_rad_s, dtype=float).ravel()
+    if speeds.size < 1 or np.any(speeds <= 0) or np.any(np.diff(speeds) <= 0):
+        raise ValueError("`speeds_rad_s` must be positive and strictly increasing [rad/s]")
+    rows = []
+    for W in speeds:
+        a = model.assemble(float(W))
+        modes = averaged_modes(a.system, n_modes, method=method)
+        axes = {b: model.bodies[b].axis for b in model.bodies}
+        ratio = whirl_ratio(modes.shapes, a.dof_labels, axes, a.plan.spin)
+        rows.append((modes, ratio))
+    width = max(m.eigenvalues.size for m, _ in rows)
+    if n_modes is not None:
+        width = min(width, int(n_modes))
+    shape = (speeds.size, width)
+    freq, zeta, delta, whirl = (np.full(shape, np.nan) for _ in range(4))
+    for i, (m, r) in enumerate(rows):
+        j = min(m.eigenvalues.size, width)
+        freq[i, :j] = m.frequency[:j]
+        zeta[i, :j] = m.damping_ratio[:j]
+        delta[i, :j] = m.log_decrement[:j]
+        whirl[i, :j] = r[:j]
+    orders = order_lines(model)
+    result = CampbellResult(speeds, freq, zeta, delta, whirl, orders)
+    result.critical_speeds = _crossings(result)
+    return result
+
+
+def _crossings(r: CampbellResult) -> list[CriticalSpeed]:
+    out: list[CriticalSpeed] = []
+    W = r.speeds
+    for name, ratio in r.orders.items():
+        for mode in range(r.frequency.shape[1]):
+            g = r.frequency[:, mode] - ratio * W
+            for i in range(W.size - 1):
+                if not (np.isfinite(g[i]) and np.isfinite(g[i + 1])):
+                    continue
+                if g[i] == 0 or g[i] * g[i + 1] < 0:
+                    t = 0.0 if g[i] == 0 else g[i] / (g[i] - g[i + 1])
+                    ws = W[i] + t * (W[i + 1] - W[i])
+                    wr = r.whirl_ratio[i, mode] + t * (
+                        r.whirl_ratio[i + 1, mode] - r.whirl_ratio[i, mode]
+                    )
+                    out.append(
+                        CriticalSpeed(
+                            name, mode, float(ws), float(ratio * ws), _whirl_label(float(wr))
+                        )
+                    )
+    return sorted(out, key=lambda c: (c.speed, c.order))
