@@ -319,7 +319,9 @@ class Model:
         [rad]. Mesh stiffness: ``stiffness`` (mean [N/m] or ``{j: k_j}`` over mesh harmonics),
         or the rectangular wave of ``contact_ratio``, ``single_stiffness``,
         ``double_stiffness`` truncated at ``stiffness_harmonics``. ``transmission_error`` is
-        ``{j: e_j}`` [m]. ``side`` selects the flank (see ``gears.line_of_action``).
+        ``{j: e_j}`` [m]: the static (unloaded) transmission error, entering as the load
+        ``k(t) e(t)`` on the line of action; the mesh damping acts on the dynamic deflection
+        rate only (Ozguven & Houser). ``side`` selects the flank (see ``gears.line_of_action``).
         """
         self._new_item(name, self.meshes)
         for fld, bname, node in (
