@@ -42,6 +42,10 @@ SAFETY = 100.0
 REL_FLOOR = 1e-10
 #: Energy fraction allowed at the outermost harmonics for a converged representative.
 EDGE_TOL = 1e-6
+#: Safety factor on the truncation-error estimate ``sqrt(edge_weight) max(|lambda|, w1)``.
+DECIDE_SAFETY = 10.0
+#: ... widened by this factor for exponents that may be one of a pair about to split.
+SPLIT_FACTOR = 4.0
 #: Dense path: reduce to the standard problem ``B^-1 A`` when ``rcond(B)`` exceeds this.
 STANDARD_RCOND = 1e-4
 
@@ -79,6 +83,14 @@ class FloquetResult:
         the truncation; small means converged in the truncation.
     converged
         True when every representative has ``edge_weight <= EDGE_TOL``.
+    decided
+        True when the truncation cannot change the verdict: every representative that is not
+        converged lies far enough from the imaginary axis, ``|Re| > DECIDE_SAFETY
+        sqrt(edge_weight) max(|lambda|, omega)`` (an estimate of its truncation error with a
+        safety factor of 10), on the side of the verdict; four times that estimate for an
+        exponent within it of ``Im = 0`` or ``w1 / 2``, where a complex pair can split into
+        a growing real pair (checked on a scan of the damped Mathieu equation). Heavily
+        damped high modes that need more harmonics do not make a stability verdict uncertain.
     method
         ``"dense"`` or ``"sparse"``.
     band
@@ -100,6 +112,26 @@ class FloquetResult:
     method: str = "dense"
     band: float = float("inf")
     info: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def decided(self) -> bool:
+        """See the class docstring."""
+        if self.converged or self.exponents.size == 0:
+            return True
+        lam = self.exponents
+        weight = self.edge_weight if self.edge_weight.size == lam.size else np.ones(lam.size)
+        loose = weight > EDGE_TOL
+        reach = DECIDE_SAFETY * np.sqrt(weight) * np.maximum(np.abs(lam), self.omega)
+        # an exponent near Im = 0 or w1/2 may be one of a pair about to split into a real pair
+        half = 0.5 * self.omega
+        edge_gap = np.abs(lam.imag / half - np.round(lam.imag / half)) * half
+        near_split = edge_gap < reach
+        if not self.stable:
+            # unstable for sure when a converged (or clearly growing) exponent says so
+            sure = (lam.real > self.tolerances) & (~loose | (lam.real > reach))
+            return bool(sure.any())
+        clear = np.where(near_split, lam.real + SPLIT_FACTOR * reach < 0, lam.real + reach < 0)
+        return bool(np.all(~loose | clear))
 
     @property
     def dominant(self) -> complex:

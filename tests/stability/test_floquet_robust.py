@@ -100,3 +100,71 @@ def test_sparse_agrees_with_dense_on_asymmetric_rotor() -> None:
     for lam in near:
         assert np.min(np.abs(sparse.exponents - lam)) < 1e-8 * max(abs(lam), 1.0)
     assert sparse.info["factorizations"] >= 1
+
+
+def _monodromy_stable(a: float, q: float, z: float) -> bool:
+    """Damped Mathieu ``y'' + 2 z y' + (a - 2 q cos 2t) y = 0``: stable iff both multipliers of
+    the monodromy matrix over one period ``pi`` (``solve_ivp``, tight tolerances) are < 1."""
+    from scipy.integrate import solve_ivp
+
+    def rhs(t, y):
+        return [y[1], -2 * z * y[1] - (a - 2 * q * np.cos(2 * t)) * y[0]]
+
+    with np.errstate(under="ignore"):
+        cols = [
+            solve_ivp(rhs, (0, np.pi), y0, rtol=1e-12, atol=1e-14, method="DOP853").y[:, -1]
+            for y0 in ([1.0, 0.0], [0.0, 1.0])
+        ]
+    return bool(np.max(np.abs(np.linalg.eigvals(np.column_stack(cols)))) < 1.0)
+
+
+def test_a_decided_verdict_matches_the_monodromy_matrix() -> None:
+    """Damped Mathieu over a grid crossing the first bands, Hill truncations of 1..4
+    harmonics: whenever ``decided`` is True the verdict equals the one of the monodromy
+    matrix; coarse truncations near the bands are flagged undecided instead."""
+    undecided = 0
+    for a in np.linspace(-0.5, 6.0, 11):
+        for q in (0.5, 1.5, 3.0):
+            for z in (0.02, 0.2, 2.0):
+                s = rl.PeriodicSystem(
+                    2.0,
+                    M={0: np.eye(1)},
+                    D={0: 2 * z * np.eye(1)},
+                    K={0: a * np.eye(1), 1: -q * np.eye(1)},
+                )
+                truth = _monodromy_stable(a, q, z)
+                for N in (1, 2, 3, 4):
+                    res = rl.floquet(s, N)
+                    if res.decided:
+                        assert res.stable == truth, (a, q, z, N, res.exponents)
+                    else:
+                        undecided += 1
+                assert rl.floquet(s, 10).decided
+    assert 0 < undecided < 400
+
+
+def test_verdict_is_undecided_only_when_the_truncation_could_flip_it() -> None:
+    """Damped Mathieu inside the first band (unstable by its monodromy matrix): two harmonics
+    call it stable, and the verdict is flagged undecided. The example rotor at its stability
+    truncation: heavily damped high modes (Re ~ -1700 1/s) are not converged, yet the
+    verdict is decided and equals that of a converged truncation."""
+    q, z = 0.3, 0.05
+    a = 0.5 * (mathieu_a(1, q) + mathieu_b(1, q))
+    assert not _monodromy_stable(a, q, z)
+    s = rl.PeriodicSystem(
+        2.0, M={0: np.eye(1)}, D={0: 2 * z * np.eye(1)}, K={0: a * np.eye(1), 1: -q * np.eye(1)}
+    )
+    coarse = rl.floquet(s, 2)
+    assert coarse.stable and not coarse.converged and not coarse.decided
+    assert not rl.floquet(s, 10).stable
+
+    from rheolin.data import example_path
+    from rheolin.io import load_model
+    from rheolin.solvers.solve import stability_harmonics
+
+    system = load_model(example_path("rotor")).assemble(3000 * np.pi / 30).system
+    res = rl.floquet(system, stability_harmonics(system))
+    assert not res.converged and res.decided and res.stable
+    assert res.exponents[res.edge_weight > 1e-6].real.max() < -1000
+    ref = rl.floquet(system, 12)
+    assert ref.converged and ref.stable

@@ -124,7 +124,7 @@ def _check_stability(system: PeriodicSystem, sol: Solution, stability: bool | No
         return sol
     res = floquet(system, stability_harmonics(system))
     sol.stable, sol.max_floquet_real = res.stable, res.max_real
-    if not res.converged:
+    if not res.decided:
         sol.message += (
             f"; the Hill truncation ({len(stability_harmonics(system))} harmonics) did not "
             "converge for every Floquet exponent: the stability verdict is uncertain"
