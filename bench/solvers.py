@@ -21,6 +21,7 @@ residual check fails there for conditioning, not for the method).
 Usage::
 
     python bench/solvers.py [--quick] [--out bench/results/solvers.md] [--timeout 900]
+    python bench/solvers.py --wide 0.3 --asym 0.5 --out bench/results/solvers_wide.md
 
 Targets: gmres within 1.5x of lti; direct >= 10x slower than gmres from |H| = 201.
 """
@@ -51,9 +52,19 @@ MEMORY_LIMIT_GB = 14.0
 
 
 # --------------------------------------------------------------------------- the system
-def beam_system(n_dof: int, time_varying: bool = True, depth: float = 0.3, asym: float = 0.05):
+def beam_system(
+    n_dof: int,
+    time_varying: bool = True,
+    depth: float = 0.3,
+    asym: float = 0.05,
+    wide: float = 0.0,
+):
     """Beam-like chain with gear mesh and asymmetric body; ``time_varying=False`` keeps the
     ``k = 0`` coefficients only (the time-averaged system, same matrices).
+
+    ``wide > 0``: the asymmetric body is a shaft segment spanning that fraction of the nodes
+    (every node of it carries a ±2 block of ``asym k_g / 2``), as a non-axisymmetric shaft
+    does, instead of two nodes.
 
     Nodes carry 2 DOF (x, y); nearest-neighbour springs ``k1`` and next-nearest springs ``k2``
     (a bending-like band, bandwidth 4 in DOF) on an elastic foundation ``k_g`` (housing and
@@ -113,6 +124,9 @@ def beam_system(n_dof: int, time_varying: bool = True, depth: float = 0.3, asym:
         shape = np.array([[1.0, -1j], [-1j, -1.0]])
         block[np.ix_(body[:2], body[:2])] = kd / 2 * shape
         block[np.ix_(body[2:], body[2:])] = kd / 4 * shape
+        for node in range(nodes - 4 - int(wide * nodes), nodes - 4) if wide > 0 else ():
+            pair = [2 * node, 2 * node + 1]
+            block[np.ix_(pair, pair)] = kd / 2 * shape
         K[2] = sp.csr_array(block)
     f1 = np.zeros(n, dtype=complex)
     f1[body[:2]] = 1e-4 * SPEED**2 * np.array([1.0, -1j]) / 2  # rotating unbalance 1e-4 kg m
@@ -139,7 +153,7 @@ def _status_kb(field: str) -> int:
     return 0
 
 
-def worker(n: int, n_h: int, method: str, out: str) -> None:
+def worker(n: int, n_h: int, method: str, out: str, asym: float, wide: float) -> None:
     """Run one method in this (fresh) process; write timing, memory and the answer."""
     import resource
 
@@ -151,7 +165,7 @@ def worker(n: int, n_h: int, method: str, out: str) -> None:
         # reserved-but-untouched memory, which made lti fail at n=1e4, |H|=801 at 14 GB.
         limit = int(MEMORY_LIMIT_GB * 2**30)
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
-    system = beam_system(n, time_varying=method != "lti")
+    system = beam_system(n, time_varying=method != "lti", asym=asym, wide=wide)
     H = rl.HarmonicSet.full((n_h - 1) // 2)
     base = _status_kb("VmRSS")
     peak_reset = _reset_peak()
@@ -180,9 +194,12 @@ def _peak_rusage_kb() -> int:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 
 
-def measure(n: int, n_h: int, method: str, timeout: float, tmp: str) -> dict:
+def measure(
+    n: int, n_h: int, method: str, timeout: float, tmp: str, asym: float, wide: float
+) -> dict:
     out = os.path.join(tmp, f"{method}_{n}_{n_h}")
-    cmd = [sys.executable, __file__, "--worker", str(n), str(n_h), method, out]
+    cmd = [sys.executable, __file__, "--worker", str(n), str(n_h), method, out, str(asym)]
+    cmd.append(str(wide))
     t0 = time.perf_counter()
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
@@ -206,7 +223,13 @@ def _fmt_s(x: dict) -> str:
 
 
 def run(
-    sizes: list[int], harmonics: list[int], timeout: float, out: str | None, repeat: int = 1
+    sizes: list[int],
+    harmonics: list[int],
+    timeout: float,
+    out: str | None,
+    repeat: int = 1,
+    asym: float = 0.05,
+    wide: float = 0.0,
 ) -> None:
     header = (
         "| n | \\|H\\| | lti [s] | perturbation [s] (its) | gmres [s] (its) | direct [s] | "
@@ -229,7 +252,10 @@ def run(
                             "of the coupled matrix, extrapolated from the smaller runs)"
                         )
                         continue
-                    runs = [measure(n, n_h, method, timeout, tmp) for _ in range(max(1, repeat))]
+                    runs = [
+                        measure(n, n_h, method, timeout, tmp, asym, wide)
+                        for _ in range(max(1, repeat))
+                    ]
                     ok = [r for r in runs if "error" not in r]
                     res[method] = min(ok, key=lambda r: r["seconds"]) if ok else runs[0]
                     if "error" in res[method] and method == "direct":
@@ -279,7 +305,9 @@ def run(
     text = "\n".join(lines)
     meta = (
         f"\n\nBeam-like chain with a gear mesh (z = {TEETH}, {MESH_HARMONICS} mesh harmonics, "
-        "rank 1) and a ±2 asymmetric-body block; n DOF, |H| = 2N + 1 harmonics "
+        "rank 1) and a ±2 asymmetric-body block "
+        + (f"over {wide:.0%} of the nodes " if wide > 0 else "on two nodes ")
+        + f"(amplitude {asym} k_g / 2 per node); n DOF, |H| = 2N + 1 harmonics "
         f"(`HarmonicSet.full(N)`). {os.cpu_count()} CPUs, default `workers`, "
         f"`stability=False`, fastest of {repeat} run(s). Peak RSS: the kernel's "
         "high-water mark of a fresh subprocess during the solve (reset after building the "
@@ -297,19 +325,29 @@ def run(
 
 def main() -> None:
     if len(sys.argv) > 1 and sys.argv[1] == "--worker":
-        n, n_h, method, out = sys.argv[2:6]
-        worker(int(n), int(n_h), method, out)
+        n, n_h, method, out, asym, wide = sys.argv[2:8]
+        worker(int(n), int(n_h), method, out, float(asym), float(wide))
         return
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--quick", action="store_true", help="small sizes (a smoke run)")
     p.add_argument("--out", help="write a markdown table here")
     p.add_argument("--timeout", type=float, default=900.0, help="seconds per method run")
     p.add_argument("--repeat", type=int, default=1, help="runs per method; the fastest is reported")
+    p.add_argument("--sizes", help="comma-separated n (default 1000,10000)")
+    p.add_argument("--harmonics", help="comma-separated |H| (default 51,201,801)")
+    p.add_argument("--asym", type=float, default=0.05, help="asymmetric block / k_g")
+    p.add_argument(
+        "--wide", type=float, default=0.0, help="asymmetric shaft segment: fraction of nodes"
+    )
     args = p.parse_args()
+    sizes, harmonics = [1000, 10000], [51, 201, 801]
     if args.quick:
-        run([400, 2000], [51, 201], args.timeout, args.out, args.repeat)
-    else:
-        run([1000, 10000], [51, 201, 801], args.timeout, args.out, args.repeat)
+        sizes, harmonics = [400, 2000], [51, 201]
+    if args.sizes:
+        sizes = [int(x) for x in args.sizes.split(",")]
+    if args.harmonics:
+        harmonics = [int(x) for x in args.harmonics.split(",")]
+    run(sizes, harmonics, args.timeout, args.out, args.repeat, args.asym, args.wide)
 
 
 if __name__ == "__main__":
