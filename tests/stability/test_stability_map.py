@@ -11,6 +11,9 @@
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.optimize import brentq
@@ -18,8 +21,10 @@ from scipy.special import mathieu_a, mathieu_b
 
 import rheolin as rl
 from rheolin.mechanics import Model
-from rheolin.mechanics.sections import general_section
 from rheolin.stability import stability_map
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "mechanics"))
+from test_model import _asymmetric_rotor
 
 STIFF = 1e6
 
@@ -36,18 +41,7 @@ def test_asymmetric_shaft_band_at_model_level() -> None:
     ``k_b = 1e11`` N/m (stiff springs next to a 1e6 N/m shaft: a badly scaled system):
     ``1 / k_i = L^3 / (48 E I_i) + 1 / (2 k_b)``."""
     E, L, I1, I2, m, c, kb = 2.1e11, 0.6, 2.0e-8, 2.6e-8, 5.0, 20.0, 1e11
-    model = Model()
-    model.add_shaft(
-        "rotor",
-        [0, L / 2, L],
-        section=general_section(1e-3, I1, I2, I1 + I2),
-        elastic_modulus=E,
-        density=0.0,
-    )
-    model.add_disk("rotor", 1, mass=m, inertia=(0.02, 0.02, 0.04))
-    model.add_bearing("left", "rotor", 0, kb, components=("ux", "uy", "uz", "phiz"))
-    model.add_bearing("right", "rotor", 2, kb, components=("ux", "uy"))
-    model.add_bearing("damper", "rotor", 1, 0.0, [c, c, c, 1.0, 1.0, 1.0], components=None)
+    model = _asymmetric_rotor(I1, I2, E, L, m, c)  # the mechanics test's rotor, k_b = 1e11
     k1, k2 = (1.0 / (L**3 / (48 * E * i) + 1.0 / (2 * kb)) for i in (I1, I2))
     lo, hi = _band(m, k1, k2, c)
     speeds = np.linspace(0.9 * lo, 1.1 * hi, 9)
