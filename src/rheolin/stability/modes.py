@@ -14,7 +14,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..floquet import hill_pencil, state_scaling
+from ..hill import hill_pencil, state_scaling
 from ..system import PeriodicSystem
 
 __all__ = ["AveragedModes", "averaged_modes", "whirl_ratio"]
