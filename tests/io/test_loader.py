@@ -229,3 +229,43 @@ def test_broken_files_are_refused_naming_the_field(what, text, pattern):
 
 def test_examples_are_documented_text():
     assert "hunting tooth" in example_text("gearbox")
+
+
+def test_condensed_body_from_a_matrix_file_relative_to_the_model(tmp_path):
+    """A spinning disk given as condensed matrices (.npz next to the model file) on a bearing:
+    the tilt whirl frequencies solve ``J_t w^2 -+ J_p W w - k_r = 0`` (Campbell API)."""
+    from rheolin.io import read_model
+    from rheolin.stability import campbell
+
+    m, jt, jp, k, kr, W = 2.0, 0.01, 0.02, 4e5, 2e3, 300.0
+    G = np.zeros((6, 6))
+    G[3, 4], G[4, 3] = jp, -jp
+    np.savez(tmp_path / "disk.npz", M=np.diag([m, m, m, jt, jt, jp]), K=np.zeros((6, 6)), G=G)
+    (tmp_path / "sub").mkdir()
+    text = f"""
+[model]
+input_body = "disk"
+
+[[condensed_bodies]]
+name = "disk"
+positions = ["0 0 0 mm"]
+path = "../disk.npz"
+
+[[condensed_bodies.bearings]]
+name = "support"
+node = 0
+components = "all"
+stiffness = ["{k} N/m", "{k} N/m", "{k} N/m", "{kr} N*m/rad", "{kr} N*m/rad", "1e3 N*m/rad"]
+"""
+    (tmp_path / "sub" / "m.toml").write_text(text)
+    model = read_model(tmp_path / "sub" / "m.toml").model
+    res = campbell(model, [W])
+    f, whirl = res.frequency[0], res.whirl[0]
+    fwd = (jp * W + np.sqrt((jp * W) ** 2 + 4 * jt * kr)) / (2 * jt)
+    bwd = (-jp * W + np.sqrt((jp * W) ** 2 + 4 * jt * kr)) / (2 * jt)
+    assert np.min(np.abs(f[whirl == "forward"] - fwd)) < 1e-9 * fwd
+    assert np.min(np.abs(f[whirl == "backward"] - bwd)) < 1e-9 * bwd
+    assert np.min(np.abs(f - np.sqrt(k / m))) < 1e-9 * np.sqrt(k / m)
+    (tmp_path / "sub" / "bad.toml").write_text(text.replace("../disk.npz", "nope.npz"))
+    with pytest.raises(rl.ModelError, match=r"condensed_bodies\[0\]\.path: no such file"):
+        read_model(tmp_path / "sub" / "bad.toml")

@@ -21,7 +21,7 @@ from ..errors import ModelError
 from ..mechanics.joints import COMPONENTS
 from ..mechanics.model import Model
 from ..mechanics.sections import general_section
-from .schema import Bearing, ModelFile, Shaft
+from .schema import Bearing, CondensedBody, ModelFile, Shaft
 from .units import UnitError, to_si
 
 __all__ = ["LoadedModel", "load_model", "parse_model", "read_model"]
@@ -58,11 +58,14 @@ def read_model(path: str | Path) -> LoadedModel:
         raw = p.read_bytes()
     except OSError as exc:
         raise ModelError(f"cannot read model file {str(p)!r}: {exc.strerror}") from None
-    return parse_model(raw, str(p))
+    return parse_model(raw, str(p), base=p.parent)
 
 
-def parse_model(raw: bytes | str, source: str = "<string>") -> LoadedModel:
-    """Validate TOML text; see :func:`load_model`."""
+def parse_model(
+    raw: bytes | str, source: str = "<string>", base: str | Path | None = None
+) -> LoadedModel:
+    """Validate TOML text; see :func:`load_model`. Relative file paths in the model (condensed
+    bodies) are taken from ``base`` (default: the working directory)."""
     data = raw.encode() if isinstance(raw, str) else raw
     try:
         doc = tomllib.loads(data.decode("utf-8"))
@@ -72,7 +75,7 @@ def parse_model(raw: bytes | str, source: str = "<string>") -> LoadedModel:
         spec = ModelFile.model_validate(doc)
     except ValidationError as exc:
         raise ModelError(_format(exc, source)) from None
-    model = _Builder(spec).build()
+    model = _Builder(spec, Path(base) if base is not None else Path.cwd()).build()
     return LoadedModel(model, spec, hashlib.sha256(data).hexdigest(), source)
 
 
@@ -168,8 +171,9 @@ def _joint_matrix(value: Any, components: list[str], kind: str, path: str) -> np
 
 
 class _Builder:
-    def __init__(self, spec: ModelFile) -> None:
+    def __init__(self, spec: ModelFile, base: Path) -> None:
         self.spec = spec
+        self.base = base
         self.nodes: dict[str, int] = {}
         self.model = Model(input_body=spec.model.input_body)
 
@@ -177,12 +181,13 @@ class _Builder:
         spec = self.spec
         bodies: list[tuple[str, Any]] = [(f"shafts[{i}]", b) for i, b in enumerate(spec.shafts)]
         bodies += [(f"rigid_bodies[{i}]", b) for i, b in enumerate(spec.rigid_bodies)]
+        bodies += [(f"condensed_bodies[{i}]", b) for i, b in enumerate(spec.condensed_bodies)]
         if not bodies:
             raise ModelError("shafts: the model needs at least one shaft or rigid body")
         for path, b in bodies:
             if b.name in self.nodes:
                 raise ModelError(f"{path}.name: a body named {b.name!r} already exists")
-            self.nodes[b.name] = len(b.positions) if isinstance(b, Shaft) else 1
+            self.nodes[b.name] = len(b.positions) if hasattr(b, "positions") else 1
         if spec.model.input_body is not None:
             self._body(spec.model.input_body, "model.input_body")
         for path, b in bodies:
@@ -240,6 +245,16 @@ class _Builder:
                 origin=b.origin,
                 section=sec,
                 speed_ratio=ratio,
+            )
+        elif isinstance(b, CondensedBody):
+            if not b.positions or any(len(x) != 3 for x in b.positions):
+                raise ModelError(f"{path}.positions: give one 3-vector of lengths per node")
+            f = Path(b.path)
+            f = f if f.is_absolute() else self.base / f
+            if not f.is_file():
+                raise ModelError(f"{path}.path: no such file {str(f)!r}")
+            self.model.add_condensed_body(
+                b.name, b.positions, path=str(f), frame=b.frame, axis=b.axis, speed_ratio=ratio
             )
         else:
             if len(b.position) != 3:
@@ -328,4 +343,6 @@ class _Builder:
         try:
             return fn(*args, **kw)
         except ModelError as exc:
+            if str(exc).startswith(path):  # already names its field
+                raise ModelError(str(exc)) from None
             raise ModelError(f"{path}: {exc}") from None

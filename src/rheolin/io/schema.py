@@ -208,6 +208,18 @@ class RigidBody(_Body):
     _inertia = field_validator("inertia")(Disk._inertia.__func__)  # type: ignore[attr-defined]
 
 
+class CondensedBody(_Body):
+    """``Model.add_condensed_body`` from a matrix file, plus its disks and bearings.
+
+    ``path``: a ``.npz`` with ``M``, ``K`` (optional ``D``, ``G``, ``frame``) in SI units, over
+    the nodes at ``positions`` (node-major, 6 DOF each); relative to the model file.
+    """
+
+    positions: list[VecLength]
+    path: str
+    frame: list[list[float]] | None = None
+
+
 class TransmissionError(_Strict):
     """One harmonic ``amplitude cos(harmonic W_mesh t + phase)`` of the static TE."""
 
@@ -276,5 +288,6 @@ class ModelFile(_Strict):
     harmonics: HarmonicsInfo = HarmonicsInfo()
     shafts: list[Shaft] = []
     rigid_bodies: list[RigidBody] = []
+    condensed_bodies: list[CondensedBody] = []
     meshes: list[Mesh] = []
     forces: list[Force] = []
