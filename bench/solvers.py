@@ -40,6 +40,8 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
+from _memory import reset_peak, status_kb
+
 TEETH = 23
 MESH_HARMONICS = 6
 SPEED = 2 * np.pi * 25.0  # shaft speed [rad/s] = w1
@@ -135,24 +137,6 @@ def beam_system(
 
 
 # --------------------------------------------------------------------------- one measurement
-def _reset_peak() -> bool:
-    """Reset the kernel's peak-RSS counter (VmHWM) of this process; False if unsupported."""
-    try:
-        with open("/proc/self/clear_refs", "w") as fh:
-            fh.write("5")
-        return True
-    except OSError:
-        return False
-
-
-def _status_kb(field: str) -> int:
-    with open("/proc/self/status") as fh:
-        for line in fh:
-            if line.startswith(field + ":"):
-                return int(line.split()[1])
-    return 0
-
-
 def worker(n: int, n_h: int, method: str, out: str, asym: float, wide: float) -> None:
     """Run one method in this (fresh) process; write timing, memory and the answer."""
     import resource
@@ -167,12 +151,12 @@ def worker(n: int, n_h: int, method: str, out: str, asym: float, wide: float) ->
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
     system = beam_system(n, time_varying=method != "lti", asym=asym, wide=wide)
     H = rl.HarmonicSet.full((n_h - 1) // 2)
-    base = _status_kb("VmRSS")
-    peak_reset = _reset_peak()
+    base = status_kb("VmRSS")
+    peak_reset = reset_peak()
     t0 = time.perf_counter()
     sol = rl.solve(system, H, method=method, stability=False)
     seconds = time.perf_counter() - t0
-    peak = _status_kb("VmHWM") if peak_reset else _peak_rusage_kb()
+    peak = status_kb("VmHWM") if peak_reset else _peak_rusage_kb()
     np.save(out + ".npy", sol.q)
     info = {
         "seconds": seconds,

@@ -41,6 +41,8 @@ from pathlib import Path
 
 import numpy as np
 
+from _memory import reset_peak, status_kb
+
 SPEED = 2 * math.pi * 50.0  # 3000 rpm [rad/s]
 ACCURACY = 1e-4
 #: Simulated time [s] of the transient probe on the hunting-tooth gearbox.
@@ -77,31 +79,14 @@ def setup(name: str, order: int = 2):  # type: ignore[no-untyped-def]
 
 
 # --------------------------------------------------------------------------- measurement
-def _reset_peak() -> bool:
-    try:
-        with open("/proc/self/clear_refs", "w") as fh:
-            fh.write("5")
-        return True
-    except OSError:
-        return False
-
-
-def _status_kb(field: str) -> int:
-    with open("/proc/self/status") as fh:
-        for line in fh:
-            if line.startswith(field + ":"):
-                return int(line.split()[1])
-    return 0
-
-
 def worker(model: str, method: str, rtol: float, backend: str, out: str) -> None:
     """One method in this fresh process: time, peak memory, harmonics."""
     import rheolin as rl
     import rheolin.solvers.transient
 
     a, H = setup(model, order=3 if method == "reference" else 2)
-    base = _status_kb("VmRSS")
-    _reset_peak()
+    base = status_kb("VmRSS")
+    reset_peak()
     t0 = time.perf_counter()
     info: dict = {}
     if method == "probe":
@@ -126,8 +111,8 @@ def worker(model: str, method: str, rtol: float, backend: str, out: str) -> None
             "steps": sol.info.get("steps", 0),
         }
     info["seconds"] = time.perf_counter() - t0
-    info["peak_mb"] = _status_kb("VmHWM") / 1024
-    info["extra_mb"] = (_status_kb("VmHWM") - base) / 1024
+    info["peak_mb"] = status_kb("VmHWM") / 1024
+    info["extra_mb"] = (status_kb("VmHWM") - base) / 1024
     Path(out + ".json").write_text(json.dumps(info))
 
 
