@@ -179,6 +179,61 @@ def test_detector_reports_the_cap_on_an_undamped_resonance() -> None:
     assert sol.history[-1] > 0.05
 
 
+def _forced_2dof() -> rl.PeriodicSystem:
+    """Damped 2-DOF with a stiffness varying at w1 and a load at w1 (decays by 0.53/period)."""
+    zeta, wn = 0.05, 2.0
+    return rl.PeriodicSystem(
+        1.0,
+        M={0: np.eye(2)},
+        D={0: 2 * zeta * wn * np.eye(2)},
+        K={0: wn**2 * np.eye(2), 1: 0.3 * np.array([[1.0, 0.5], [0.5, 0.0]])},
+        f={1: np.ones(2)},
+    )
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_detector_reports_a_stall_at_the_integrator_noise(backend: str) -> None:
+    """``period_tol`` far below what ``rtol`` resolves: the change between periods falls
+    geometrically until the integration error of each period dominates, then wanders at that
+    level. The run stops there (status 1, "stalled"), long before the cap, instead of
+    integrating up to ``max_periods``; the returned harmonics are still those of ``rtol``."""
+    system = _forced_2dof()
+    ref = rl.solve(system, 8, method="direct", stability=False)
+    rtol = 1e-5
+    sol = rl.solve(
+        system,
+        8,
+        method="transient",
+        stability=False,
+        options={"backend": backend, "rtol": rtol, "period_tol": 1e-10, "max_periods": 300},
+    )
+    assert not sol.success and sol.status == 1
+    assert "stalled" in sol.message and "rtol=1e-05" in sol.message, sol.message
+    # geometric decay 0.53 per period from ~1 reaches 1e-4 in ~15 periods; then the window
+    decay_periods = int(np.ceil(np.log(100 * rtol) / np.log(np.exp(-0.2 * np.pi))))
+    assert sol.iterations <= decay_periods + 2 * tr.STALL_WINDOW + 5 < 300, sol.iterations
+    assert 1e-3 * rtol < sol.history[-1] <= tr.STALL_NOISE * rtol
+    assert _rel(sol, ref) < 1e-3  # the answer at the accuracy rtol gives
+
+
+def test_default_period_tol_follows_rtol() -> None:
+    """Without ``period_tol``, a coarse ``rtol`` stops at ``10 rtol`` instead of stalling."""
+    system = _forced_2dof()
+    ref = rl.solve(system, 8, method="direct", stability=False)
+    sol = rl.solve(
+        system,
+        8,
+        method="transient",
+        stability=False,
+        options={"backend": "scipy", "rtol": 1e-5},
+    )
+    assert sol.success, sol.message
+    assert "period_tol=0.0001" in sol.message and sol.history[-1] <= 1e-4
+    assert _rel(sol, ref) < 2e-3
+    fine = rl.solve(system, 8, method="transient", stability=False, options={"backend": "scipy"})
+    assert "period_tol=1e-06" in fine.message and _rel(fine, ref) < 1e-5
+
+
 def test_shortest_repeating_period_is_used() -> None:
     """Only even harmonics: the response repeats every pi / w1; the answer is unchanged and
     a longer comparison window (a multiple, through ``period``) gives the same result."""

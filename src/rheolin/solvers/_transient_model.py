@@ -24,6 +24,11 @@ log = logging.getLogger(__name__)
 WOODBURY_MAX = 256
 #: Dense mean matrices (and an explicit ``M_0^-1``) up to this many DOFs.
 DENSE_MAX = 300
+#: The change between periods has stalled when, over this many periods, it fell by less than
+#: ``STALL_RATIO`` per period (geometric mean) while below ``STALL_NOISE * rtol``.
+STALL_WINDOW = 6
+STALL_RATIO = 0.95
+STALL_NOISE = 100.0
 
 
 class _Series:
@@ -186,7 +191,8 @@ class _Detector:
         self.periods = 0  # completed periods
         self.history: list[float] = []
         self.callback = callback
-        self.done = False
+        self.done = False  # stop integrating (converged or stalled)
+        self.stalled = False  # stopped because the change sits at the integrator's noise
 
     def next_time(self) -> float:
         return self.index * self.dt
@@ -212,8 +218,17 @@ class _Detector:
                 if self.callback is not None:
                     self.callback(self.periods, change)
                 self.done = change <= self.s.period_tol
+                if not self.done and self._stalled():
+                    self.done = self.stalled = True
             if not self.done:
                 self.prev, self.cur = self.cur, self.prev
+
+    def _stalled(self) -> bool:
+        h = self.history
+        if len(h) <= STALL_WINDOW or h[-1] > STALL_NOISE * self.s.rtol:
+            return False
+        old = h[-1 - STALL_WINDOW]
+        return old > 0 and (h[-1] / old) ** (1 / STALL_WINDOW) > STALL_RATIO
 
     def harmonics(self, op: HarmonicBalance) -> np.ndarray:
         """Coefficients ``q_n``, ``n >= 0``, from the DFT of the last complete period."""

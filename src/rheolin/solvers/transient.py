@@ -22,7 +22,10 @@ greatest common divisor of the system's coefficient and load harmonics (the shor
 that actually repeats, often much shorter than ``2 pi / w1``). ``q`` is sampled ``S`` times per
 period (``S > 2 max|n| / g`` so no harmonic of ``H`` aliases onto another); integration stops
 when the relative change between two consecutive periods, ``max|q_p - q_{p-1}| / max|q_p|``, is
-below ``period_tol``, or fails (``status=1``) at ``max_periods``. The harmonics are the DFT of
+below ``period_tol`` (default ``max(1e-6, 10 rtol)``), or fails (``status=1``) at
+``max_periods``, or earlier when the change has stalled at the integrator's own noise (no
+decrease over ``STALL_WINDOW`` periods while below ``STALL_NOISE * rtol``: ``period_tol`` is
+below what ``rtol`` resolves, and more periods would not help). The harmonics are the DFT of
 the last period at the indices of ``H``.
 
 Cost, honestly: a hunting-tooth gearbox repeats only after thousands of shaft revolutions,
@@ -45,10 +48,25 @@ import scipy.sparse.linalg as spla
 from ..operator import HarmonicBalance
 from ..system import PeriodicSystem
 from ._transient_backends import _run_scipy, _run_sundae
-from ._transient_model import _Coefficients, _Detector, _SingularMass
+from ._transient_model import (
+    STALL_NOISE,
+    STALL_RATIO,
+    STALL_WINDOW,
+    _Coefficients,
+    _Detector,
+    _SingularMass,
+)
 from .registry import Options, SolverOutcome, register
 
-__all__ = ["DEFAULTS", "TransientSettings", "solve_transient", "sundae_available"]
+__all__ = [
+    "DEFAULTS",
+    "STALL_NOISE",
+    "STALL_RATIO",
+    "STALL_WINDOW",
+    "TransientSettings",
+    "solve_transient",
+    "sundae_available",
+]
 
 log = logging.getLogger(__name__)
 
@@ -56,7 +74,7 @@ log = logging.getLogger(__name__)
 DEFAULTS: dict[str, Any] = {
     "rtol": 1e-8,  # integrator relative tolerance
     "atol": None,  # absolute tolerance; None: 1e-3 * rtol * response scale (q and v apart)
-    "period_tol": 1e-6,  # relative change between consecutive periods that ends the run
+    "period_tol": None,  # period-to-period change that ends the run; None: max(1e-6, 10 rtol)
     "max_periods": 1000,  # cap on integrated periods (``maxiter`` also sets it)
     "samples": None,  # samples per period; None: 4 max(|n|, |k|) / g + 4
     "period": None,  # comparison window [s]; a multiple of the shortest repeating period
@@ -107,7 +125,11 @@ class TransientSettings:
         if "max_periods" not in extra and opts.maxiter is not None:
             o["max_periods"] = int(opts.maxiter)
         rtol = _positive(o["rtol"], "rtol")
-        period_tol = _positive(o["period_tol"], "period_tol")
+        period_tol = (
+            max(1e-6, 10 * rtol)
+            if o["period_tol"] is None
+            else _positive(o["period_tol"], "period_tol")
+        )
         max_periods = o["max_periods"]
         if isinstance(max_periods, bool) or not isinstance(max_periods, int) or max_periods < 2:
             raise ValueError(f"`max_periods` must be an integer >= 2, got {max_periods!r}")
@@ -280,6 +302,20 @@ def solve_transient(op: HarmonicBalance, opts: Options) -> SolverOutcome:
             False,
             3,
             f"transient: {stats['failed']} ({where})",
+            "transient",
+            det.periods,
+            det.history,
+            info,
+        )
+    if det.stalled:
+        return SolverOutcome(
+            Q,
+            False,
+            1,
+            f"transient: the change between periods stalled at {last:.3g} over the last "
+            f"{STALL_WINDOW} periods, above period_tol={s.period_tol:g} ({where}). That is the "
+            f"integrator's noise at rtol={s.rtol:g}: lower `rtol` or raise `period_tol` "
+            "(the harmonics of the last period are returned)",
             "transient",
             det.periods,
             det.history,
