@@ -12,7 +12,7 @@ import logging
 
 from .errors import ModelError
 from .floquet import FloquetResult, floquet
-from .harmonics import HarmonicSet
+from .harmonics import HarmonicSet, TruncationWarning
 from .mechanics import Assembled, Model
 from .solution import STATUS, Solution
 from .solvers import METHODS, solve
@@ -28,6 +28,7 @@ __all__ = [
     "ModelError",
     "PeriodicSystem",
     "Solution",
+    "TruncationWarning",
     "floquet",
     "solve",
 ]

@@ -13,18 +13,21 @@ from __future__ import annotations
 import json
 import sys
 import time
+import warnings
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
 from . import __version__
 from ._cli_report import parse_speed, parse_speeds, print_summary
 from .errors import ModelError
+from .harmonics import TruncationWarning
 
 app = typer.Typer(
     add_completion=False,
@@ -54,6 +57,33 @@ STABILITY = typer.Option(
 def _fail(message: str) -> typer.Exit:
     err.print(f"[red]error:[/red] {message}", highlight=False, markup=True)
     return typer.Exit(2)
+
+
+class _Notes:
+    """Collect the warnings rheolin raises about a run (e.g. a truncated harmonic set), once
+    each, for the console and the JSON summary."""
+
+    def __init__(self) -> None:
+        self.messages: list[str] = []
+        self._catch = warnings.catch_warnings(record=True)
+
+    def __enter__(self) -> _Notes:
+        self._caught = self._catch.__enter__()
+        warnings.simplefilter("always", TruncationWarning)
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self._catch.__exit__(*exc)
+        for w in self._caught:
+            if issubclass(w.category, TruncationWarning):
+                if str(w.message) not in self.messages:
+                    self.messages.append(str(w.message))
+            else:
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+
+    def show(self) -> None:
+        for m in self.messages:
+            err.print(f"[yellow]warning:[/yellow] {escape(m)}", highlight=False)
 
 
 def _load(path: Path) -> Any:
@@ -152,7 +182,8 @@ def run(
         raise _fail("give --speed (the model file has no model.speed)")
     out_dir = Path(out) if out is not None else Path(f"{model.stem}_results")
     t0 = time.perf_counter()
-    point = solve_point(lm.model, w, **opts)
+    with _Notes() as notes:
+        point = solve_point(lm.model, w, **opts)
     seconds = time.perf_counter() - t0  # assembly, solve and stability check
     ds = point_dataset(point, model_sha256=lm.sha256, model_name=lm.spec.model.name)
     node_list = None
@@ -164,6 +195,7 @@ def run(
     write_dataset(ds, out_dir / "results.nc")
     summary = summarize(ds)
     summary["model_file"] = str(model)
+    summary["warnings"] = notes.messages
     write_summary(summary, out_dir / "summary.json")
     written = [out_dir / "results.nc", out_dir / "summary.json"]
     if plots:
@@ -174,6 +206,7 @@ def run(
         sys.stdout.write(json.dumps(summary, indent=2) + "\n")
     else:
         print_summary(console, summary, seconds)
+        notes.show()
         console.print("wrote " + ", ".join(str(p) for p in written))
     if not point.solution.success:
         raise typer.Exit(1)
@@ -224,7 +257,8 @@ def sweep(
 
         # the stability map decides every speed's stability: no second Floquet run per point
         point_opts = {**opts, "stability": False} if stability_map else opts
-        ds = sweep_speeds(lm.model, w.tolist(), progress=step, **point_opts)
+        with _Notes() as notes:
+            ds = sweep_speeds(lm.model, w.tolist(), progress=step, **point_opts)
     ranges: list[tuple[float, float]] = []
     range_notes: list[dict[str, Any]] = []
     smap = None
@@ -263,6 +297,7 @@ def sweep(
         "stable": [None if s < 0 else bool(s) for s in ds["stable"].values],
         "unstable_ranges_rpm": ranges,
         "unstable_ranges": range_notes,
+        "warnings": notes.messages,
     }
     with atomic_write(out_dir / "sweep.json") as tmp:
         tmp.write_text(json.dumps(table, indent=2) + "\n")
@@ -282,6 +317,7 @@ def sweep(
         f"{unstable} unstable, {unchecked} not checked"
         + (f"; stability map unstable ranges (rpm): {_fmt_ranges(ranges)}" if smap else "")
     )
+    notes.show()
     written = [out_dir / "sweep.nc", out_dir / "sweep.json"]
     written += [out_dir / "sweep.png"] if plots else []
     written += [out_dir / "stability_map.nc"] if smap is not None else []
@@ -364,8 +400,6 @@ def demo(out: Path = DEMO_OUT) -> None:
                 str(path),
                 "--speeds",
                 "1500:4500:500rpm",
-                "--max-order",
-                "30",
                 "--out",
                 str(out / "sweep"),
                 "--no-stability-map",

@@ -2,12 +2,21 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
 
-__all__ = ["HarmonicSet", "as_harmonic_set"]
+__all__ = ["HarmonicSet", "TruncationWarning", "as_harmonic_set"]
+
+
+class TruncationWarning(UserWarning):
+    """A frequency cut-off leaves out harmonics at which the system is loaded.
+
+    The response to those load harmonics is then not computed at all, and through the
+    time-varying coefficients it also misses from the harmonics that are kept.
+    """
 
 
 class HarmonicSet:
@@ -115,6 +124,16 @@ class HarmonicSet:
             frontier = new
         if not current:
             raise ValueError("`max_harmonic` removes every load harmonic")
+        dropped = sorted(n for n in seeds if n > 0 and cap is not None and n > cap)
+        if dropped:
+            kept = sum(1 for n in seeds if n >= 0) - len(dropped)
+            warnings.warn(
+                f"max_harmonic={cap} leaves out {len(dropped)} of {len(dropped) + kept} load "
+                f"harmonics ({_listing(dropped)}): their response is not computed; a cut-off "
+                f"of at least {dropped[-1]} keeps them",
+                TruncationWarning,
+                stacklevel=2,
+            )
         return cls(current)
 
     @property
@@ -149,6 +168,13 @@ class HarmonicSet:
         else:
             body = f"{idx[0]}, {idx[1]}, ..., {idx[-2]}, {idx[-1]}; {idx.size} indices"
         return f"HarmonicSet([{body}])"
+
+
+def _listing(values: list[int], head: int = 6) -> str:
+    """``"840, 1120, ..., 1680"``: a short listing of integers."""
+    if len(values) <= head:
+        return ", ".join(str(v) for v in values)
+    return ", ".join(str(v) for v in values[: head - 1]) + f", ..., {values[-1]}"
 
 
 def as_harmonic_set(harmonics: HarmonicSet | int | Iterable[int]) -> HarmonicSet:

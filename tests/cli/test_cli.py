@@ -90,6 +90,36 @@ def test_run_results_reopen_with_xarray_and_match_the_python_api(small_run):
     assert np.allclose(E.values, [r.value[0] for r in rows], atol=1e-9 * abs(E.values).max())
 
 
+def test_a_cut_off_below_the_mesh_load_is_reported(small_run, tmp_path):
+    """The transmission error loads the 20-tooth mesh at order 20: ``--max-order 10`` leaves it
+    out (the DTE disappears), and the run says so on stderr and in summary.json."""
+    d, res = small_run
+    assert json.loads(res.stdout)["warnings"] == []
+    cut = cli(
+        "run",
+        str(d / "model.toml"),
+        "--out",
+        str(tmp_path / "cut"),
+        "--max-order",
+        "10",
+        "--stability",
+        "off",
+        "--no-plots",
+    )
+    assert cut.returncode == 0, cut.stderr
+    assert "warning:" in cut.stderr and "orders 20 of the input speed" in " ".join(
+        cut.stderr.split()
+    )
+    notes = json.loads((tmp_path / "cut" / "summary.json").read_text())["warnings"]
+    assert len(notes) == 1 and "max_order=10 leaves out 1 of 3 load harmonics" in notes[0]
+    full = xr.open_dataset(d / "out" / "results.nc")
+    assert (
+        20 in full["order"].values
+        and 20 not in xr.open_dataset(tmp_path / "cut" / "results.nc")["order"].values
+    )
+    assert float(np.abs(complex_values(full["dte"].sel(order=20))).max()) > 1e-7  # ~ 2 um TE
+
+
 def test_run_writes_plots_and_no_temporary_files(small_run):
     d, _ = small_run
     names = sorted(p.name for p in (d / "out").iterdir())

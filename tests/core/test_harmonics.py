@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -45,6 +47,19 @@ def test_closure_single_generator_by_hand() -> None:
     h2 = rl.HarmonicSet.closure(s, order=2)
     assert list(h2) == [-9, -7, -5, -3, -1, 1, 3, 5, 7, 9]
     assert list(rl.HarmonicSet.closure(s, order=2, max_harmonic=6)) == [-5, -3, -1, 1, 3, 5]
+
+
+def test_a_cut_off_below_a_load_harmonic_warns() -> None:
+    """Loads at 1, 3 and 7 with generator 4: a cut-off of 6 drops the load at 7 (only the
+    load at 7 reaches 7 - 4 = 3 at order 1, so the kept harmonics are wrong too); 7 does not."""
+    s = _system([4], [1, 3, 7])
+    with pytest.warns(rl.TruncationWarning, match=r"leaves out 1 of 3 load harmonics \(7\)"):
+        h = rl.HarmonicSet.closure(s, order=1, max_harmonic=6)
+    assert 7 not in h and 3 in h
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert 7 in rl.HarmonicSet.closure(s, order=1, max_harmonic=7)
+        rl.HarmonicSet.closure(s, order=1)
 
 
 def test_closure_two_generators_by_hand() -> None:

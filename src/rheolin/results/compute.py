@@ -6,10 +6,11 @@ Kept apart from the CLI so that tests and scripts get exactly what ``rheolin run
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..harmonics import HarmonicSet
+from ..harmonics import HarmonicSet, TruncationWarning
 from ..mechanics.assembly import Assembled
 from ..mechanics.model import Model
 from ..solution import Solution
@@ -44,7 +45,26 @@ def harmonic_set(a: Assembled, order: int = 2, max_order: float | None = None) -
     True
     """
     cap = None if max_order is None else int(max_order / float(a.base_ratio))
-    return HarmonicSet.closure(a.system, order=order, max_harmonic=cap, generators=a.generators)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        hset = HarmonicSet.closure(a.system, order=order, max_harmonic=cap, generators=a.generators)
+    for w in caught:
+        if not issubclass(w.category, TruncationWarning):
+            warnings.warn(w.message, w.category, stacklevel=2)
+            continue
+        base = float(a.base_ratio)
+        loads = sorted(k for k in a.system.load_harmonics if k >= 0)
+        out = [k for k in loads if cap is not None and k > cap]
+        orders = [f"{k * base:.4g}" for k in out]
+        shown = orders if len(orders) <= 6 else [*orders[:5], "...", orders[-1]]
+        warnings.warn(
+            f"max_order={max_order:g} leaves out {len(out)} of {len(loads)} load harmonics "
+            f"(orders {', '.join(shown)} of the input speed): their response is not computed; "
+            f"max_order >= {out[-1] * base:.4g} keeps them",
+            TruncationWarning,
+            stacklevel=2,
+        )
+    return hset
 
 
 def _hill_size(a: Assembled) -> int:
