@@ -96,7 +96,7 @@ def solve_gmres(op: HarmonicBalance, opts: Options) -> SolverOutcome:
         G = op.restricted_inverse(cols, rows)  # (|H+|, |C|, |R|)
 
         def reduced(Z: np.ndarray) -> np.ndarray:
-            return Z + op.apply_dA_support(np.einsum("hcr,hr->hc", G, Z), rows, cols)
+            return Z + op.apply_dA_support((G @ Z[:, :, None])[:, :, 0], rows, cols)
 
         rhs = -op.apply_dA_support(q0[:, cols], rows, cols)
         Z, info, history = _real_gmres(reduced, rhs, weights, opts, scale, restart=200)
