@@ -97,6 +97,31 @@ class _Block:
             return sp.csr_array(sub) if sparse else np.asarray(sub)
 
         self.M, self.D, self.K = compress(M), compress(D), compress(K)
+        self.n = n
+        self._entries: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The union pattern of ``K, D, M`` in global DOF indices, sorted by (column, row)
+        (CSC order), and the values on it: ``rows, cols, values`` with ``values`` of shape
+        ``(3, nnz)`` holding ``K, D, M`` (zero where one is absent). Built once."""
+        if self._entries is None:
+            coos = [None if x is None else sp.coo_array(x) for x in (self.K, self.D, self.M)]
+            keys = [
+                None if x is None else self.cols[x.col].astype(np.int64) * self.n + self.rows[x.row]
+                for x in coos
+            ]
+            union = np.unique(np.concatenate([k for k in keys if k is not None]))
+            values = np.zeros((3, union.size), dtype=complex)
+            for j, (x, k) in enumerate(zip(coos, keys, strict=True)):
+                if x is not None and k is not None:
+                    np.add.at(values[j], np.searchsorted(union, k), x.data)
+            self._entries = (union % self.n, union // self.n, values)
+        return self._entries
+
+    def values(self, s: np.ndarray) -> np.ndarray:
+        """``K + s D + s^2 M`` on :meth:`entries`' pattern, one row per ``s``."""
+        _, _, (K, D, M) = self.entries()
+        return K[None, :] + s[:, None] * D[None, :] + (s * s)[:, None] * M[None, :]
 
     def apply(self, Xc: np.ndarray, s: np.ndarray) -> np.ndarray:
         """Rows ``self.rows`` of ``A_k(n) x_n``; ``Xc`` holds columns ``self.cols`` of ``x_n``.
@@ -223,25 +248,10 @@ class HarmonicBalance:
         nr, nc = rows.size, cols.size
         parts: dict[bool, tuple[list, list, list]] = {False: ([], [], []), True: ([], [], [])}
         for block, hrows, src, neg, s in self._coupling:
-            ri = np.searchsorted(rows, block.rows)
-            ci = np.searchsorted(cols, block.cols)
-            coeffs = [x for x in (block.K, block.D, block.M)]
-            dense = [
-                None if x is None else (x.toarray() if sp.issparse(x) else np.asarray(x))
-                for x in coeffs
-            ]
-            union = sum(np.abs(x) for x in dense if x is not None)
-            a, b = np.nonzero(union)
-            K, D, M = (None if x is None else x[a, b] for x in dense)
-            vals = np.zeros((s.size, a.size), dtype=complex)
-            if K is not None:
-                vals += K[None, :]
-            if D is not None:
-                vals += s[:, None] * D[None, :]
-            if M is not None:
-                vals += (s * s)[:, None] * M[None, :]
-            r = hrows[:, None] * nr + ri[a][None, :]
-            c = src[:, None] * nc + ci[b][None, :]
+            br, bc, _ = block.entries()
+            r = hrows[:, None] * nr + np.searchsorted(rows, br)[None, :]
+            c = src[:, None] * nc + np.searchsorted(cols, bc)[None, :]
+            vals = block.values(s)
             for flag in (False, True):
                 pick = neg == flag
                 if pick.any():
@@ -287,34 +297,20 @@ class HarmonicBalance:
         three sparse additions (which cost more than the factorization of a 126-DOF block).
         """
         if self._pattern is None:
-            b = self._blocks[0]
-            nd = self.n_dof
-            coos = [sp.coo_array(x) if x is not None else None for x in (b.K, b.D, b.M)]
-            # global (column, row) keys; a compressed block maps back through rows/cols
-            flat = [
-                None if x is None else b.cols[x.col].astype(np.int64) * nd + b.rows[x.row]
-                for x in coos
-            ]
-            keys = np.unique(np.concatenate([f for f in flat if f is not None]))
-            values = np.zeros((3, keys.size))  # sorted by (column, row): CSC order
-            for j, (x, f) in enumerate(zip(coos, flat, strict=True)):
-                if x is not None and f is not None:
-                    np.add.at(values[j], np.searchsorted(keys, f), x.data.real)
-            cols = keys // nd
-            indptr = np.searchsorted(cols, np.arange(nd + 1)).astype(np.int64)
-            indices = (keys % nd).astype(np.int64)
-            self._pattern = (indptr, indices, values)
+            rows, cols, values = self._blocks[0].entries()
+            indptr = np.searchsorted(cols, np.arange(self.n_dof + 1)).astype(np.int64)
+            self._pattern = (indptr, rows.astype(np.int64), values.real)  # X_0 is real
         return self._pattern
 
     def A0_matrix(self, n: int) -> Any:
         """``A0(n) = -(n w1)^2 M_0 + i n w1 D_0 + K_0`` (sparse CSC or dense)."""
-        b = self._blocks[0]
         s = 1j * n * self.w1
-        terms = [(b.K, 1.0), (b.D, s), (b.M, s * s)]
         if self.sparse:
             indptr, indices, (k0, d0, m0) = self._A0_pattern()
-            data = k0 + s * d0 + (s * s) * m0 if n else k0 + 0.0
+            data = k0 + s * d0 + (s * s) * m0 if n else k0.copy()
             return sp.csc_array((data, indices.copy(), indptr.copy()), shape=(self.n_dof,) * 2)
+        b = self._blocks[0]
+        terms = [(b.K, 1.0), (b.D, s), (b.M, s * s)]
         acc = np.zeros((self.n_dof, self.n_dof), dtype=complex if n else float)
         for x, c in terms:
             if x is not None:
@@ -463,22 +459,7 @@ class HarmonicBalance:
         pos_of = {int(n): j for j, n in enumerate(self.full)}
         rows_all, cols_all, vals_all = [], [], []
         for k, block in self._blocks.items():
-            parts = [(x, c) for x, c in ((block.K, 0), (block.D, 1), (block.M, 2)) if x is not None]
-            coo = [
-                sp.coo_array(x) if self.sparse else sp.coo_array(np.asarray(x)) for x, _ in parts
-            ]
-            union = abs(coo[0]).astype(float)
-            for extra in coo[1:]:
-                union = union + abs(extra).astype(float)
-            pattern = sp.coo_array(union)  # union sparsity pattern of K_k, D_k, M_k
-            pattern.sum_duplicates()
-            r, c = pattern.row, pattern.col
-            vals = np.zeros((3, r.size), dtype=complex)
-            for (x, power), _ in zip(parts, coo, strict=True):
-                dense = x[r, c] if self.sparse else np.asarray(x)[r, c]
-                vals[power] = np.asarray(dense).ravel()
-            if not block.full:  # compressed block: back to global DOF indices
-                r, c = block.rows[r], block.cols[c]
+            r, c, _ = block.entries()
             ns, ms = [], []
             for n in self.full:
                 m = int(n) + k
@@ -487,10 +468,7 @@ class HarmonicBalance:
                     ms.append(pos_of[m])
             if not ns:
                 continue
-            nv = np.array(ns, dtype=float)
-            s = 1j * self.w1 * nv
-            block_vals = vals[0][None, :] + s[:, None] * vals[1][None, :]
-            block_vals = block_vals + (s * s)[:, None] * vals[2][None, :]
+            block_vals = block.values(1j * self.w1 * np.array(ns, dtype=float))
             col0 = np.array([pos_of[n] for n in ns]) * nd
             row0 = np.array(ms) * nd
             rows_all.append((row0[:, None] + r[None, :]).ravel())
