@@ -87,14 +87,13 @@ def setup(name: str, reference: bool = False, order: int = 0):  # type: ignore[n
     from rheolin.io.loader import parse_model
     from rheolin.results.compute import harmonic_set
 
-    want = order
     lm = parse_model(model_text(name))
-    order, max_order = lm.spec.harmonics.order, lm.spec.harmonics.max_order
+    file_order, max_order = lm.spec.harmonics.order, lm.spec.harmonics.max_order
     assert max_order is not None
     a = lm.model.assemble(SPEED)
     if reference:
-        return a, harmonic_set(a, order + 1, 1.25 * max_order)
-    return a, harmonic_set(a, order if want <= 0 else want, max_order)
+        return a, harmonic_set(a, file_order + 1, 1.25 * max_order)
+    return a, harmonic_set(a, order if order > 0 else file_order, max_order)
 
 
 # --------------------------------------------------------------------------- measurement
@@ -203,8 +202,8 @@ def measure(
     order: int = 0,
 ) -> dict:
     out = os.path.join(tmp, f"{model}_{method}_{backend}_{rtol:g}_{order}")
-    cmd = [sys.executable, __file__, "--worker", model, method, repr(rtol), backend, out]
-    cmd.append(str(order))
+    args = [model, method, repr(rtol), backend, out, str(order)]
+    cmd = [sys.executable, __file__, "--worker", *args]
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
     except subprocess.TimeoutExpired:
