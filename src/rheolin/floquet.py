@@ -1,11 +1,18 @@
-"""Floquet stability of the periodic system by Hill's method (DESIGN.md §6).
+"""Floquet stability of the periodic system by Hill's method (DESIGN.md §6, docs/stability.md).
 
-Two paths over the same (balanced) Hill pencil ``lambda B y = A y``:
+Three paths over the same (balanced) Hill pencil ``lambda B y = A y``:
 
 * ``"dense"``: every eigenvalue by QZ, with left eigenvectors for a per-exponent error bound;
 * ``"sparse"``: only the exponents near the imaginary axis, by shift-invert Arnoldi
   (``scipy.sparse.linalg.eigs`` on ``(A - sigma B)^-1 B``, one sparse LU per shift) along a
-  frequency range; the adjoint problem gives the left eigenvectors for the same error bound.
+  frequency range; the adjoint problem gives the left eigenvectors for the same error bound;
+* ``"lattice"``: for systems whose time variation comes from a few generators (gear meshes,
+  shafts), the Hill problem on the lattice of their integer combinations, solved near every
+  mode of the time-averaged system (:mod:`rheolin.floquet_lattice`).
+
+The dense and sparse paths need a dense grid ``-N..N`` (in units of the gcd of its indices);
+any other harmonic set is refused, because their choice of representatives and their
+truncation test assume one.
 
 Representatives are the copies whose eigenvector is centred on harmonic 0 (smallest
 energy-weighted mean of ``|n|``; the signed mean would also pick spurious eigenvectors split
@@ -25,11 +32,23 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .budget import MemoryBudgetError, format_bytes
+from .budget import memory_budget as resolve_budget
 from .harmonics import HarmonicSet, as_harmonic_set
 from .hill import _dense, _diag, hill_matrices, hill_pencil
+from .lattice import Lattice, system_lattice
 from .system import PeriodicSystem
 
-__all__ = ["MAX_DENSE_HILL", "FloquetResult", "floquet", "hill_matrices", "hill_pencil"]
+__all__ = [
+    "DEFAULT_LATTICE_ORDER",
+    "MAX_DENSE_HILL",
+    "FloquetResult",
+    "dense_stability_harmonics",
+    "floquet",
+    "floquet_memory",
+    "hill_matrices",
+    "hill_pencil",
+]
 
 log = logging.getLogger(__name__)
 
@@ -49,6 +68,10 @@ DECIDE_SAFETY = 10.0
 SPLIT_FACTOR = 4.0
 #: Dense path: reduce to the standard problem ``B^-1 A`` when ``rcond(B)`` exceeds this.
 STANDARD_RCOND = 1e-4
+#: Lattice path: an exponent is decided when ``|Re|`` exceeds this many truncation estimates.
+TRUNCATION_SAFETY = 10.0
+#: Lattice order of ``floquet(system)`` (raised by one where the verdict is undecided).
+DEFAULT_LATTICE_ORDER = 2
 
 _EPS = float(np.finfo(float).eps)
 
@@ -98,7 +121,33 @@ class FloquetResult:
         Sparse method: every exponent with ``|Re| <= band`` in the searched frequency range
         was found (``inf`` for dense).
     info
-        Method details (shifts, factorizations, timings).
+        Method details (shifts, factorizations, timings, lattice size and memory estimate).
+    truncation
+        Lattice method: per-exponent estimate of the truncation error [1/s], the
+        second-order correction from the harmonics just outside the lattice. An exponent's
+        verdict is decided when ``|Re| > TRUNCATION_SAFETY x truncation``. Empty otherwise.
+    complete
+        Lattice method: as many exponents were found as the time-averaged system has.
+    lattice
+        Lattice method: the :class:`~rheolin.lattice.Lattice` of the truncation.
+    dominant
+        Lattice method: for each exponent, the index of the time-averaged mode (in
+        ``averaged``) that carries most of its eigenvector at harmonic 0.
+    partner
+        Lattice method: for each exponent, the harmonic ``h`` other than 0 that carries most
+        of its eigenvector's energy (what it resonates with) and the time-averaged mode that
+        dominates the eigenvector there (an index into ``averaged``).
+    averaged
+        Lattice method: the exponents of the time-averaged system.
+    averaged_tol
+        Lattice method: their tolerances (as ``tolerances``).
+
+    Notes
+    -----
+    The dense and sparse methods fold every exponent into ``(-omega/2, omega/2]``. The
+    lattice method keeps the copy centred on harmonic 0, whose imaginary part is the modal
+    frequency: ``omega`` is input speed / 4757 for a hunting-tooth gearbox, and folding into
+    a band of 0.07 rad/s would say nothing.
     """
 
     exponents: np.ndarray
@@ -113,10 +162,19 @@ class FloquetResult:
     method: str = "dense"
     band: float = float("inf")
     info: dict[str, Any] = field(default_factory=dict)
+    truncation: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    complete: bool = True
+    lattice: Lattice | None = None
+    dominant: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    partner: list[tuple[int, int]] = field(default_factory=list)
+    averaged: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=complex))
+    averaged_tol: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def decided(self) -> bool:
         """See the class docstring."""
+        if self.method == "lattice":
+            return self._decided_lattice()
         if self.converged or self.exponents.size == 0:
             return True
         lam = self.exponents
@@ -134,40 +192,59 @@ class FloquetResult:
         clear = np.where(near_split, lam.real + SPLIT_FACTOR * reach < 0, lam.real + reach < 0)
         return bool(np.all(~loose | clear))
 
+    def _decided_lattice(self) -> bool:
+        if not self.complete:
+            return False
+        lam, tol = self.exponents, self.tolerances
+        reach = TRUNCATION_SAFETY * self.truncation
+        if not self.stable:
+            return bool(np.any(lam.real > tol + reach))
+        loose = self.truncation > tol
+        return bool(np.all(~loose | (lam.real + reach < 0)))
+
     @property
-    def dominant(self) -> complex:
+    def leading(self) -> complex:
         """The exponent with the largest real part (``nan`` when none was found)."""
         return complex(self.exponents[0]) if self.exponents.size else complex("nan")
 
 
 def floquet(
     system: PeriodicSystem,
-    harmonics: HarmonicSet | int | Iterable[int],
+    harmonics: HarmonicSet | Lattice | int | Iterable[int] | None = None,
     *,
     method: str = "auto",
+    order: int | None = None,
     frequencies: tuple[float, float] | None = None,
     k: int = 24,
     max_shifts: int = 200,
+    memory_budget: str | int | float | None = None,
+    near: Any = None,
 ) -> FloquetResult:
     """Floquet exponents by Hill's method.
 
-    The truncated Hill pencil has ``|H|`` copies of every exponent, shifted by ``i k w1``;
-    the representative kept is the eigenvalue whose eigenvector is centred on harmonic 0
-    (smallest energy-weighted mean of ``|n|``), folded into ``(-w1/2, w1/2]``. The pencil
-    is balanced first (:func:`~rheolin.hill.state_scaling`) and every exponent carries its
-    own tolerance from its condition number, so stiff springs next to soft ones, rigid-body
-    modes and undamped modes do not turn into false instabilities.
+    The truncated Hill pencil has a copy of every exponent for each harmonic, shifted by
+    ``i h w1``; the representative kept is the eigenvalue whose eigenvector is centred on
+    harmonic 0. The pencil is balanced first (:func:`~rheolin.hill.state_scaling`) and every
+    exponent carries its own tolerance from its condition number, so stiff springs next to
+    soft ones, rigid-body modes and undamped modes do not turn into false instabilities.
 
     Parameters
     ----------
     system
         The periodic system (the load is ignored).
     harmonics
-        Harmonic set for the Hill truncation: an int ``N`` means ``-N..N``. Use a dense
-        set: Floquet modes are not restricted to the load's harmonics.
+        The truncation. ``None`` (default) chooses: the time-averaged eigenproblem for a
+        time-invariant system; the dense grid of :func:`dense_stability_harmonics` when its
+        Hill matrix is small; else the lattice of :func:`~rheolin.lattice.system_lattice`.
+        An int ``N`` means ``-N..N``; a :class:`~rheolin.lattice.Lattice` selects the lattice
+        method. The dense and sparse methods accept only dense grids (multiples of one
+        step), because their representatives and truncation test assume one.
     method
-        ``"dense"`` (all exponents, QZ), ``"sparse"`` (exponents near the imaginary axis,
-        shift-invert) or ``"auto"`` (dense up to a Hill size of ``AUTO_DENSE_LIMIT``).
+        ``"auto"``, ``"dense"`` (all exponents, QZ), ``"sparse"`` (exponents near the
+        imaginary axis, shift-invert) or ``"lattice"`` (module :mod:`rheolin.floquet_lattice`).
+    order
+        Lattice order. ``None``: :data:`DEFAULT_LATTICE_ORDER`, raised by one when the
+        verdict is undecided and the larger lattice fits the memory budget.
     frequencies
         Sparse method: range ``(lo, hi)`` [rad/s] of the (unfolded) imaginary parts searched,
         default ``(0, max|H| w1 / 2)``: modes up to half the truncation frequency, which is
@@ -177,6 +254,15 @@ def floquet(
         Sparse method: eigenvalues per shift.
     max_shifts
         Sparse method: cap on the number of shifts (factorizations).
+    near
+        Lattice method: search only near the time-averaged modes closest to these values
+        (tracking one exponent across speeds). The result is partial (``complete`` is
+        False, ``decided`` too).
+    memory_budget
+        Refuse (:class:`~rheolin.budget.MemoryBudgetError`, before allocating) when the
+        estimated memory exceeds it (bytes or ``"4 GB"``; default
+        :func:`rheolin.budget.memory_budget`). The automatic choice lowers the lattice order
+        instead, and says so in ``info["note"]``.
 
     Examples
     --------
@@ -190,12 +276,42 @@ def floquet(
     (False, 2, True)
     >>> bool(abs(rl.floquet(s, 10, method="sparse").max_real - res.max_real) < 1e-10)
     True
+    >>> lat = rl.floquet(s, method="lattice", order=10)
+    >>> lat.method, bool(abs(lat.max_real - res.max_real) < 1e-10), lat.decided
+    ('lattice', True, True)
     """
-    hset = as_harmonic_set(harmonics)
-    size = 2 * system.n * len(hset)
-    allowed = ("auto", "dense", "sparse")
+    allowed = ("auto", "dense", "sparse", "lattice")
     if method not in allowed:
         raise ValueError(f"`method` must be one of {list(allowed)}, got {method!r}")
+    budget = memory_budget
+    if isinstance(harmonics, Lattice):
+        if method not in ("auto", "lattice"):
+            raise ValueError(
+                f"a Lattice truncation needs method='lattice' (or 'auto'), got {method!r}"
+            )
+        return _floquet_lattice(system, harmonics, budget=budget, near=near)
+    if near is not None and method != "lattice":
+        raise ValueError("`near` needs method='lattice'")
+    if method == "lattice":
+        if harmonics is not None:
+            raise ValueError(
+                "method='lattice' builds its own truncation: pass `order` (and no `harmonics`), "
+                "or a rheolin.lattice.Lattice as `harmonics`"
+            )
+        return _lattice_auto(
+            system, order, budget, refine=order is None and near is None, near=near
+        )
+    if harmonics is None:
+        if system.time_invariant:
+            hset = HarmonicSet([0])
+        else:
+            hset = dense_stability_harmonics(system)
+            if method == "auto" and 2 * system.n * len(hset) > AUTO_DENSE_LIMIT:
+                return _lattice_auto(system, order, budget, refine=order is None)
+    else:
+        hset = as_harmonic_set(harmonics)
+    _require_grid(hset)
+    size = 2 * system.n * len(hset)
     if method == "auto":
         method = "dense" if size <= AUTO_DENSE_LIMIT else "sparse"
     if method == "dense":
@@ -204,12 +320,150 @@ def floquet(
                 f"the dense Hill matrix would have size {size} (2 x n x |H|) > {MAX_DENSE_HILL}; "
                 "reduce `harmonics` or the model size, or use method='sparse'"
             )
+        _check_budget(size * size * 16 * 7, budget, "the dense Hill problem", "fewer harmonics")
         with np.errstate(under="ignore"):  # far harmonics of eigenvectors underflow harmlessly
             return _floquet_dense(system, hset)
     if isinstance(k, bool) or int(k) < 1:
         raise ValueError(f"`k` must be a positive integer, got {k!r}")
     with np.errstate(under="ignore"):
         return _floquet_sparse(system, hset, frequencies, int(k), int(max_shifts))
+
+
+def dense_stability_harmonics(system: PeriodicSystem) -> HarmonicSet:
+    """Dense Hill truncation ``-N..N`` with ``N`` twice the widest coefficient harmonic + 4
+    (``{0}`` for a time-invariant system)."""
+    kmax = max((abs(k) for k in system.coefficient_harmonics), default=0)
+    return HarmonicSet.full(2 * kmax + 4 if kmax else 0)
+
+
+def _require_grid(hset: HarmonicSet) -> None:
+    """Dense and sparse Hill need ``{-N s, ..., N s}``: refuse any other set."""
+    H = hset.indices
+    step = int(np.gcd.reduce(np.abs(H))) or 1
+    N = int(H.max()) // step
+    if H.size != 2 * N + 1 or not np.array_equal(H, step * np.arange(-N, N + 1)):
+        raise ValueError(
+            f"`harmonics` must be a dense grid -N..N (times one step) for the dense and sparse "
+            f"Hill methods; this set has {H.size} of the {2 * N + 1} multiples of {step} up to "
+            f"{N * step}. Their representatives and truncation test assume a grid and would "
+            "judge a lattice wrongly: use method='lattice' (rl.floquet(system, "
+            "method='lattice', order=p)) or pass a rheolin.lattice.Lattice"
+        )
+
+
+def _check_budget(estimate: int, budget: Any, what: str, advice: str) -> None:
+    limit = resolve_budget(budget)
+    if estimate > limit:
+        raise MemoryBudgetError(
+            f"{what} needs an estimated {format_bytes(estimate)}, more than the memory budget "
+            f"of {format_bytes(limit)}; {advice}, or raise the budget (RHEOLIN_MEMORY_BUDGET "
+            "or `memory_budget`)"
+        )
+
+
+def floquet_memory(system: PeriodicSystem, order: int | None = None) -> tuple[str, int]:
+    """The method ``floquet(system)`` would use and its estimated memory [bytes].
+
+    For the lattice method ``order`` is the lattice order (default
+    :data:`DEFAULT_LATTICE_ORDER`). Nothing large is built.
+    """
+    from .floquet_lattice import lattice_memory
+
+    if system.time_invariant:
+        size = 2 * system.n
+        if size <= AUTO_DENSE_LIMIT:
+            return "dense", size * size * 16 * 7
+        return "sparse", int(system.n * 16 * 400 + 200 * 2**20)
+    hset = dense_stability_harmonics(system)
+    size = 2 * system.n * len(hset)
+    if size <= AUTO_DENSE_LIMIT:
+        return "dense", size * size * 16 * 7
+    p = DEFAULT_LATTICE_ORDER if order is None else int(order)
+    return "lattice", lattice_memory(system, system_lattice(system, p, max_size=10**6))
+
+
+def _lattice_auto(
+    system: PeriodicSystem, order: int | None, budget: Any, *, refine: bool, near: Any = None
+) -> FloquetResult:
+    """Lattice method at ``order`` (default order, lowered to fit the budget, raised by one
+    when undecided and the larger lattice fits)."""
+    from .floquet_lattice import lattice_memory
+
+    limit = resolve_budget(budget)
+    p = DEFAULT_LATTICE_ORDER if order is None else int(order)
+    note = ""
+    lat = system_lattice(system, p, max_size=10**6)
+    est = lattice_memory(system, lat)
+    while est > limit and order is None and p > 1:
+        p -= 1
+        lat = system_lattice(system, p, max_size=10**6)
+        est = lattice_memory(system, lat)
+        note = (
+            f"lattice order lowered to {p} to fit the memory budget of {format_bytes(limit)} "
+            "(a coarser truncation: the verdict may be undecided)"
+        )
+    res = _floquet_lattice(system, lat, budget=budget, near=near)
+    if note:
+        res.info["note"] = note
+    if refine and not res.decided:
+        finer = system_lattice(system, p + 1, max_size=10**6)
+        if lattice_memory(system, finer) <= limit:
+            log.info("floquet: order %d undecided; refining to order %d", p, p + 1)
+            res2 = _floquet_lattice(system, finer, budget=budget)
+            res2.info["refined_from"] = p
+            return res2
+        res.info["note"] = (
+            f"undecided at lattice order {p}; order {p + 1} would exceed the memory budget"
+        )
+    return res
+
+
+def _floquet_lattice(
+    system: PeriodicSystem, lattice: Lattice, *, budget: Any, near: Any = None
+) -> FloquetResult:
+    from .floquet_lattice import lattice_exponents, lattice_memory
+
+    est = lattice_memory(system, lattice)
+    _check_budget(
+        est,
+        budget,
+        f"the lattice Hill problem (order {lattice.order}, {len(lattice)} harmonics, "
+        f"size {2 * system.n * len(lattice)})",
+        "lower the lattice order",
+    )
+    with np.errstate(under="ignore"), _single_thread_blas():
+        out = lattice_exponents(system, lattice, near=near)
+    w = system.omega
+    res = _result(out.exponents, out.bounds, out.edge, w, "lattice", info=out.info)
+    order = np.argsort(-out.exponents.real, kind="stable")
+    res.truncation = out.truncation[order]
+    res.dominant = out.dominant[order]
+    res.partner = [out.partner[i] for i in order]
+    res.complete = out.complete and near is None
+    res.lattice = lattice
+    res.averaged = out.averaged
+    res.averaged_tol = out.averaged_tol
+    res.info["memory_estimate"] = est
+    res.info["centroid"] = out.centroid[order]
+    return res
+
+
+class _single_thread_blas:
+    """Limit BLAS to one thread: the lattice kernels are many small products, where
+    threads cost more than they bring (2x slower on the gearbox with two)."""
+
+    def __enter__(self) -> None:
+        try:
+            from threadpoolctl import threadpool_limits
+        except ImportError:  # pragma: no cover - threadpoolctl is a dependency
+            self._ctx = None
+            return
+        self._ctx = threadpool_limits(limits=1, user_api="blas")
+        self._ctx.__enter__()
+
+    def __exit__(self, *exc: Any) -> None:
+        if self._ctx is not None:
+            self._ctx.__exit__(*exc)
 
 
 # ----------------------------------------------------------------------------- shared pieces

@@ -95,7 +95,11 @@ def hill_pencil(
     B = sp.kron(sp.identity(H.size), sp.kron(top, eye))
     for k in set(Ms) | set(Ds) | set(Ks):
         # shift[i, j] = 1 where H[i] - H[j] == k: row harmonic m couples to column m - k
-        rows, cols = np.nonzero(H[:, None] - H[None, :] == k)
+        # (sorted search: linear in |H|, never an |H| x |H| comparison)
+        cols = np.arange(H.size)
+        pos = np.minimum(np.searchsorted(H, H + k), H.size - 1)
+        hit = H[pos] == H + k
+        rows, cols = pos[hit], cols[hit]
         if rows.size == 0:
             continue
         shift = sp.csr_array((np.ones(rows.size), (rows, cols)), shape=(H.size, H.size))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -45,6 +46,8 @@ class Solution:
         Floquet stability of the operating point (None when it was not checked).
     max_floquet_real
         Largest real part of the Floquet exponents [1/s] (None when not checked).
+    floquet
+        The :class:`~rheolin.FloquetResult` of the stability check (None when not checked).
     """
 
     harmonics: np.ndarray
@@ -60,6 +63,7 @@ class Solution:
     stable: bool | None = None
     max_floquet_real: float | None = None
     info: dict = field(default_factory=dict)
+    floquet: Any = None
 
     @property
     def frequencies(self) -> np.ndarray:

@@ -15,7 +15,6 @@ from ..mechanics.assembly import Assembled
 from ..mechanics.model import Model
 from ..solution import Solution
 from ..solvers import solve
-from ..solvers.solve import AUTO_STABILITY_SIZE
 
 __all__ = ["OperatingPoint", "harmonic_set", "solve_point"]
 
@@ -67,11 +66,6 @@ def harmonic_set(a: Assembled, order: int = 2, max_order: float | None = None) -
     return hset
 
 
-def _hill_size(a: Assembled) -> int:
-    kmax = max((abs(k) for k in a.system.coefficient_harmonics), default=0)
-    return 2 * a.system.n * (2 * (2 * kmax + 4) + 1 if kmax else 1)
-
-
 def solve_point(
     model: Model,
     speed: float,
@@ -85,9 +79,8 @@ def solve_point(
 ) -> OperatingPoint:
     """Assemble ``model`` at input ``speed`` [rad/s] and solve for the periodic steady state.
 
-    ``stability=None`` checks Floquet stability only when the dense Hill problem is small
-    (as :func:`rheolin.solve`); the size test is made here first, without building the
-    dense harmonic set, so large models do not pay for it.
+    ``stability=None`` checks Floquet stability whenever it fits the memory budget (as
+    :func:`rheolin.solve`).
 
     >>> from rheolin.io import load_model
     >>> from rheolin.data import example_path
@@ -98,17 +91,7 @@ def solve_point(
     t0 = time.perf_counter()
     a = model.assemble(speed)
     hset = harmonic_set(a, order, max_order)
-    skip = stability is None and _hill_size(a) > AUTO_STABILITY_SIZE
-    sol = solve(
-        a.system,
-        hset,
-        method=method,
-        rtol=rtol,
-        callback=callback,
-        stability=False if skip else stability,
-    )
-    if skip:
-        sol.message += "; stability not checked (system too large for the dense Hill check)"
+    sol = solve(a.system, hset, method=method, rtol=rtol, callback=callback, stability=stability)
     settings = dict(method=method, order=order, max_order=max_order, rtol=rtol)
     positions = {(b.name, i): x for b in model.bodies.values() for i, x in enumerate(b.positions)}
     return OperatingPoint(a, hset, sol, time.perf_counter() - t0, settings, positions)

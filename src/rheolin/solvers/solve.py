@@ -8,7 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from ..floquet import floquet
+from ..budget import format_bytes, memory_budget
+from ..floquet import dense_stability_harmonics, floquet, floquet_memory
 from ..harmonics import HarmonicSet, as_harmonic_set
 from ..operator import HarmonicBalance, SingularBlockError
 from ..solution import Solution
@@ -16,7 +17,7 @@ from ..system import PeriodicSystem
 from . import direct, krylov, lti, perturbation, transient  # noqa: F401  (register the methods)
 from .registry import METHODS, RESIDUAL_CHECKED, Options, SolverOutcome
 
-__all__ = ["AUTO_STABILITY_SIZE", "solve", "stability_harmonics"]
+__all__ = ["solve", "stability_harmonics"]
 
 log = logging.getLogger(__name__)
 
@@ -60,11 +61,14 @@ def solve(
     workers
         Threads for the per-harmonic factorizations and solves (default: the cores).
     stability
-        Check Floquet stability (Hill's method) of the operating point. ``None`` (default)
-        checks when the dense Hill problem is small enough (``2 n |H_F| <=``
-        :data:`AUTO_STABILITY_SIZE`); ``True`` always; ``False`` never. An unstable
-        operating point gives ``success=False``, ``status=4``: its periodic solution exists
-        but is not physical (DESIGN.md §6).
+        Check Floquet stability (Hill's method, :func:`rheolin.floquet` with its automatic
+        choice of truncation) of the operating point. ``None`` (default) checks whenever the
+        estimated memory of the Hill problem fits the memory budget
+        (:func:`rheolin.budget.memory_budget`) and says in ``message`` why when it does
+        not; ``True`` always (raises :class:`~rheolin.budget.MemoryBudgetError` beyond the
+        budget); ``False`` never. An unstable operating point gives ``success=False``,
+        ``status=4``: its periodic solution exists but is not physical (DESIGN.md §6). The
+        Floquet result is kept in ``Solution.floquet``.
     options
         Method-specific options (e.g. for ``"transient"``), passed through unchanged.
 
@@ -101,33 +105,37 @@ def solve(
     return _check_stability(system, sol, stability)
 
 
-#: Largest dense Hill matrix checked automatically by :func:`solve`.
-AUTO_STABILITY_SIZE = 1200
-
-
-def _stability_order(system: PeriodicSystem) -> int:
-    kmax = max((abs(k) for k in system.coefficient_harmonics), default=0)
-    return 2 * kmax + 4 if kmax else 0
-
-
 def stability_harmonics(system: PeriodicSystem) -> HarmonicSet:
-    """Dense Hill truncation for a stability check: twice the widest coefficient harmonic + 4."""
-    return HarmonicSet.full(_stability_order(system))
+    """Dense Hill truncation for a stability check (see :func:`~rheolin.floquet.floquet`)."""
+    return dense_stability_harmonics(system)
 
 
 def _check_stability(system: PeriodicSystem, sol: Solution, stability: bool | None) -> Solution:
     if stability is False:
         return sol
-    hill_size = 2 * system.n * (2 * _stability_order(system) + 1)
-    if stability is None and hill_size > AUTO_STABILITY_SIZE:
-        sol.message += "; stability not checked (system too large for the dense Hill check)"
-        return sol
-    res = floquet(system, stability_harmonics(system))
+    if stability is None:
+        kind, estimate = floquet_memory(system)
+        limit = memory_budget()
+        if estimate > limit:
+            sol.message += (
+                f"; stability not checked: the {kind} Hill problem needs an estimated "
+                f"{format_bytes(estimate)}, more than the memory budget of "
+                f"{format_bytes(limit)} (raise RHEOLIN_MEMORY_BUDGET, or reduce the model)"
+            )
+            return sol
+    res = floquet(system)
+    sol.floquet = res
     sol.stable, sol.max_floquet_real = res.stable, res.max_real
     if not res.decided:
+        size = res.info.get("size", 0) // max(2 * system.n, 1)
+        what = (
+            f"the lattice of order {res.lattice.order} ({len(res.lattice)} harmonics)"
+            if res.lattice is not None
+            else f"the Hill truncation ({size} harmonics)"
+        )
         sol.message += (
-            f"; the Hill truncation ({len(stability_harmonics(system))} harmonics) did not "
-            "converge for every Floquet exponent: the stability verdict is uncertain"
+            f"; {what} did not converge for every Floquet exponent: the stability verdict "
+            "is uncertain"
         )
     if not res.stable and sol.success:
         sol.success, sol.status = False, 4

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -9,19 +10,22 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..floquet import FloquetResult, floquet
-from ..harmonics import HarmonicSet, as_harmonic_set
-from ..mechanics.assembly import assemble_coefficients
-from ..solvers.solve import stability_harmonics
-from ..system import PeriodicSystem
+from ..harmonics import as_harmonic_set
+from .mechanism import (
+    ASYMMETRY,
+    CIRCULATORY,
+    COMBINED,
+    MESH,
+    ROTATING_DAMPING,
+    UNIDENTIFIED,
+    Mechanism,
+)
+from .mechanism import identify as _identify
 
 __all__ = ["StabilityMap", "UnstableRange", "mechanism", "stability_map"]
 
 _EPS = float(np.finfo(float).eps)
-ROTATING_DAMPING = "rotating damping"
-CIRCULATORY = "circulatory forces (time-invariant)"
-MESH = "parametric mesh resonance"
-ASYMMETRY = "asymmetric shaft band"
-COMBINED = "combined parametric excitation"
+__categories__ = (ROTATING_DAMPING, CIRCULATORY, MESH, ASYMMETRY, COMBINED, UNIDENTIFIED)
 
 
 @dataclass(frozen=True)
@@ -40,6 +44,9 @@ class UnstableRange:
         ``"rotating damping"``, ``"circulatory forces (time-invariant)"``,
         ``"parametric mesh resonance"``, ``"asymmetric shaft band"``,
         ``"combined parametric excitation"``; or ``"unidentified"``.
+    detail
+        The :class:`~rheolin.stability.mechanism.Mechanism` found at the worst sample (the
+        generators, principal/secondary/combination, the frequency relation), or None.
     """
 
     lower: float
@@ -48,6 +55,12 @@ class UnstableRange:
     upper_open: bool
     max_real: float
     mechanism: str
+    detail: Mechanism | None = None
+
+    @property
+    def label(self) -> str:
+        """The mechanism in one line (the category when no detail was identified)."""
+        return self.detail.label if self.detail is not None else self.mechanism
 
 
 @dataclass
@@ -65,9 +78,16 @@ class StabilityMap:
     stable, marginal, converged
         Per speed (see :class:`~rheolin.FloquetResult`).
     frequency
-        ``|Im|`` of the dominant (folded) exponent per speed [rad/s].
+        ``|Im|`` of the leading exponent per speed [rad/s] (folded into ``(-w1/2, w1/2]``
+        by the dense method, the modal frequency with the lattice method).
     ranges
         The unstable speed ranges.
+    decided
+        Per speed: the truncation cannot change the verdict (:attr:`FloquetResult.decided`).
+    method
+        Per speed: the Floquet method used (``"dense"``, ``"sparse"``, ``"lattice"``).
+    info
+        Totals: Floquet evaluations, seconds, the largest lattice.
     """
 
     speeds: np.ndarray
@@ -78,6 +98,9 @@ class StabilityMap:
     converged: np.ndarray
     frequency: np.ndarray
     ranges: list[UnstableRange] = field(default_factory=list)
+    decided: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    method: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=str))
+    info: dict[str, Any] = field(default_factory=dict)
 
     @property
     def all_stable(self) -> bool:
@@ -97,8 +120,14 @@ class StabilityMap:
         import xarray as xr
 
         rg = self.ranges
+        n = self.speeds.size
+        decided = self.decided if self.decided.size == n else np.ones(n, dtype=bool)
+        method = self.method if self.method.size == n else np.full(n, "")
         ds = xr.Dataset(
             {
+                "decided": (("speed",), decided.astype(bool)),
+                "floquet_method": (("speed",), method.astype(str)),
+                "range_label": (("range",), np.array([r.label for r in rg], str)),
                 "max_real": (("speed",), self.max_real),
                 "tol": (("speed",), self.tol),
                 "stable": (("speed",), self.stable.astype(bool)),
@@ -120,30 +149,29 @@ class StabilityMap:
         return ds
 
 
-def _harmonics(system: PeriodicSystem, harmonics: Any) -> HarmonicSet:
-    if harmonics is None:
-        return stability_harmonics(system)
-    if callable(harmonics):
-        return as_harmonic_set(harmonics(system))
-    return as_harmonic_set(harmonics)
-
-
 def stability_map(
     model: Any,
     speeds_rad_s: Any,
     *,
     harmonics: Any = None,
     method: str = "auto",
+    order: int | None = None,
     refine: float = 1e-8,
-    identify: bool = True,
+    identify_mechanism: bool = True,
+    progress: Callable[[int, FloquetResult], None] | None = None,
+    memory_budget: Any = None,
+    identify: bool | None = None,
 ) -> StabilityMap:
     """Largest Floquet real part of a :class:`~rheolin.mechanics.Model` against speed.
 
     At every speed the full periodic system is assembled and :func:`rheolin.floquet` decides
-    stability (balanced Hill pencil, per-exponent tolerances). Contiguous unstable samples
-    form an :class:`UnstableRange`; its bounds are refined (Brent's method on the margin
-    ``max_real - tol`` between the bracketing samples) to a relative precision ``refine``,
-    and its mechanism is identified at its worst sample (:func:`mechanism`).
+    stability with its automatic truncation (dense Hill for small systems, the harmonic
+    lattice for gearboxes; balanced pencil, per-exponent tolerances). Contiguous unstable
+    samples form an :class:`UnstableRange`; its bounds are refined (Brent's method on the
+    margin ``max Re - tol`` between the bracketing samples) to a relative precision
+    ``refine``, and its mechanism is identified at its worst sample
+    (:mod:`rheolin.stability.mechanism`). With the lattice method the refinement tracks the
+    growing exponent alone (a search near its time-averaged modes), not every exponent.
 
     Parameters
     ----------
@@ -152,15 +180,21 @@ def stability_map(
     speeds_rad_s
         Increasing input speeds [rad/s].
     harmonics
-        Hill truncation: None (``rheolin.solvers.solve.stability_harmonics`` per speed), a
-        harmonic set / int, or ``callable(system) -> harmonic set``.
+        Hill truncation: None (automatic), a harmonic set / int (a dense grid), or
+        ``callable(system) -> harmonic set``.
     method
-        Floquet method: ``"auto"``, ``"dense"`` or ``"sparse"``.
+        Floquet method: ``"auto"``, ``"dense"``, ``"sparse"`` or ``"lattice"``.
+    order
+        Lattice order (default: automatic, see :func:`rheolin.floquet`).
     refine
         Relative precision of the range bounds (0: the bounds are the first/last unstable
         samples).
-    identify
-        Identify the mechanism of each range (a few more Floquet evaluations per range).
+    identify_mechanism
+        Identify the mechanism of each range.
+    progress
+        Called as ``progress(i, result)`` after each speed.
+    memory_budget
+        Passed to :func:`rheolin.floquet`.
 
     Examples
     --------
@@ -175,19 +209,48 @@ def stability_map(
     >>> m.add_bearing("g", "r", 0, 1e4, 1.0, components=("uz", "phix", "phiy", "phiz"))
     >>> smap = stability_map(m, np.linspace(90, 120, 7))
     >>> r = smap.ranges[0]
-    >>> round(r.lower, 3), round(r.upper, 3), r.mechanism
-    (100.0, 110.0, 'asymmetric shaft band')
+    >>> round(r.lower, 3), round(r.upper, 3), r.mechanism, r.detail.resonance
+    (100.0, 110.0, 'asymmetric shaft band', 'principal')
     """
+    import time
+
+    if identify is not None:  # the former keyword
+        identify_mechanism = bool(identify)
     speeds = np.asarray(speeds_rad_s, dtype=float).ravel()
     if speeds.size < 1 or np.any(speeds <= 0) or np.any(np.diff(speeds) <= 0):
         raise ValueError("`speeds_rad_s` must be positive and strictly increasing [rad/s]")
+    t0 = time.perf_counter()
+    count = [0]
 
-    def evaluate(W: float) -> tuple[Any, HarmonicSet, FloquetResult]:
+    def truncation(system: Any) -> Any:
+        if harmonics is None:
+            return None
+        if callable(harmonics):
+            return as_harmonic_set(harmonics(system))
+        return as_harmonic_set(harmonics)
+
+    def evaluate(W: float, near: Any = None) -> tuple[Any, FloquetResult]:
         a = model.assemble(float(W))
-        H = _harmonics(a.system, harmonics)
-        return a, H, floquet(a.system, H, method=method)
+        count[0] += 1
+        if near is not None:
+            res = floquet(
+                a.system, method="lattice", order=order, near=near, memory_budget=memory_budget
+            )
+        else:
+            res = floquet(
+                a.system,
+                truncation(a.system),
+                method=method,
+                order=order,
+                memory_budget=memory_budget,
+            )
+        return a, res
 
-    results = [evaluate(W)[2] for W in speeds]
+    results: list[FloquetResult] = []
+    for i, W in enumerate(speeds):
+        results.append(evaluate(W)[1])
+        if progress is not None:
+            progress(i, results[-1])
     smap = StabilityMap(
         speeds=speeds,
         max_real=np.array([r.max_real for r in results]),
@@ -195,7 +258,9 @@ def stability_map(
         stable=np.array([r.stable for r in results]),
         marginal=np.array([r.marginal for r in results]),
         converged=np.array([r.converged for r in results]),
-        frequency=np.array([abs(r.dominant.imag) for r in results]),
+        frequency=np.array([abs(r.leading.imag) for r in results]),
+        decided=np.array([r.decided for r in results]),
+        method=np.array([r.method for r in results]),
     )
     unstable = ~smap.stable
     i = 0
@@ -206,16 +271,29 @@ def stability_map(
         j = i
         while j + 1 < speeds.size and unstable[j + 1]:
             j += 1
+        worst = i + int(np.argmax(smap.max_real[i : j + 1]))
+        lead = results[worst]
+        tracked = _tracked(lead)
+
+        def margin(W: float, tracked: Any = tracked) -> float:
+            return _margin(evaluate(W, near=tracked)[1])
+
         lo, hi = speeds[i], speeds[j]
         if i > 0:
-            lo = _edge(lambda W: _margin(evaluate(W)[2]), speeds[i - 1], speeds[i], refine)
+            lo = _edge(margin, speeds[i - 1], speeds[i], refine)
         if j < speeds.size - 1:
-            hi = _edge(lambda W: _margin(evaluate(W)[2]), speeds[j], speeds[j + 1], refine)
-        worst = i + int(np.argmax(smap.max_real[i : j + 1]))
-        mech = "unidentified"
-        if identify:
-            a, H, _ = evaluate(speeds[worst])
-            mech = mechanism(model, a, H, method=method)
+            hi = _edge(margin, speeds[j + 1], speeds[j], refine)
+        detail = None
+        category = UNIDENTIFIED
+        if identify_mechanism:
+            a, res = evaluate(speeds[worst]) if lead.method != "lattice" else (None, lead)
+            if res.method != "lattice":  # the dense method has no partner harmonics
+                a, res = evaluate_lattice(model, speeds[worst], order, memory_budget)
+                count[0] += 1
+            if a is None:
+                a = model.assemble(float(speeds[worst]))
+            detail = _identify(model, a, res)
+            category = detail.category or UNIDENTIFIED
         smap.ranges.append(
             UnstableRange(
                 float(lo),
@@ -223,16 +301,41 @@ def stability_map(
                 i == 0,
                 j == speeds.size - 1,
                 float(smap.max_real[i : j + 1].max()),
-                mech,
+                category,
+                detail,
             )
         )
         i = j + 1
+    smap.info = {
+        "evaluations": count[0],
+        "seconds": time.perf_counter() - t0,
+        "largest_lattice": max(
+            (len(r.lattice) for r in results if r.lattice is not None), default=0
+        ),
+    }
     return smap
+
+
+def evaluate_lattice(model: Any, W: float, order: int | None, budget: Any) -> tuple[Any, Any]:
+    """The model at ``W`` and its lattice Floquet result (for naming a mechanism)."""
+    a = model.assemble(float(W))
+    return a, floquet(a.system, method="lattice", order=order, memory_budget=budget)
+
+
+def _tracked(res: FloquetResult) -> Any:
+    """Values near which a lattice search finds the growing exponents again (None: all)."""
+    if res.method != "lattice" or res.dominant.size == 0:
+        return None
+    grow = res.exponents.real > res.tolerances
+    idx = res.dominant[grow] if grow.any() else res.dominant[:1]
+    partners = [m for (_, m) in (res.partner[i] for i in np.flatnonzero(grow)) if m >= 0]
+    modes = sorted({int(i) for i in idx} | {int(m) for m in partners})
+    return res.averaged[modes]
 
 
 def _margin(res: FloquetResult) -> float:
     """Positive exactly when unstable: the largest ``Re - tol`` over the exponents, or (when
-    stable) ``min(max_real, 0) - tol`` of the dominant exponent; continuous across a
+    stable) ``min(max_real, 0) - tol`` of the leading exponent; continuous across a
     transversal crossing of the axis."""
     if not res.stable:
         return float(np.max(res.exponents.real - res.tolerances))
@@ -243,76 +346,16 @@ def _edge(margin: Any, stable_side: float, unstable_side: float, rtol: float) ->
     """Speed where ``margin`` changes sign between the two samples (Brent's method)."""
     if rtol <= 0:
         return unstable_side
-    return float(
-        brentq(margin, stable_side, unstable_side, xtol=rtol * abs(unstable_side), rtol=4 * _EPS)
-    )
+    fa, fb = margin(stable_side), margin(unstable_side)
+    if not (fa <= 0 < fb):
+        return unstable_side  # the tracked exponent does not bracket the edge: keep the sample
+    lo, hi = sorted((stable_side, unstable_side))
+    return float(brentq(margin, lo, hi, xtol=rtol * abs(unstable_side), rtol=4 * _EPS))
 
 
-def _has_rotating_damping(model: Any) -> bool:
-    for b in model.bodies.values():
-        mat = b.data.get("material")
-        if b.kind == "shaft" and mat is not None and mat.damping_beta > 0:
-            return True
-    return any(j["frame"] is not None and np.any(j["D"]) for j in model.joints.values())
-
-
-def _split(
-    system: PeriodicSystem, mesh_parts: dict[str, dict[int, Any]]
-) -> tuple[PeriodicSystem, PeriodicSystem]:
-    """``(mesh variation only, everything but the mesh variation)`` on the averaged system."""
-
-    def build(keep_mesh: bool, keep_rest: bool) -> PeriodicSystem:
-        tables = {}
-        for name in ("M", "D", "K"):
-            full = getattr(system, name)
-            mesh = mesh_parts[name]
-            out = {}
-            for k, x in full.items():
-                if k == 0:
-                    out[k] = x
-                    continue
-                mk = mesh.get(k)
-                rest = x if mk is None else x - mk
-                part = (mk if keep_mesh and mk is not None else 0) + (rest if keep_rest else 0)
-                if not isinstance(part, int) and abs(part).max() > 0:
-                    out[k] = part
-            tables[name] = out or None
-        return PeriodicSystem(system.omega, M=tables["M"], D=tables["D"], K=tables["K"])
-
-    return build(True, False), build(False, True)
-
-
-def mechanism(model: Any, assembled: Any, harmonics: Any, *, method: str = "auto") -> str:
-    """Name the mechanism of an instability of an assembled model.
-
-    * the time-averaged system is already unstable: ``"rotating damping"`` when the model
-      has rotating damping (shaft material damping, damping in a body frame), otherwise
-      ``"circulatory forces (time-invariant)"``;
-    * only the gear-mesh variation kept (on the averaged system) is unstable:
-      ``"parametric mesh resonance"``;
-    * everything but the mesh variation (rotating asymmetry at 2x) is unstable:
-      ``"asymmetric shaft band"``;
-    * neither alone, the full system is: ``"combined parametric excitation"``.
-    """
-    system = assembled.system
-    avg = PeriodicSystem(
-        system.omega,
-        M={0: system.M[0]} if 0 in system.M else None,
-        D={0: system.D[0]} if 0 in system.D else None,
-        K={0: system.K[0]} if 0 in system.K else None,
-    )
-    if not floquet(avg, [0], method=method).stable:
-        return ROTATING_DAMPING if _has_rotating_damping(model) else CIRCULATORY
-    terms = [t for t, _, _ in assembled.meshes.values()]
-    Mm, Dm, Km, _ = assemble_coefficients(terms, system.n) if terms else ({}, {}, {}, {})
-    parts = {
-        name: {k: v for k, v in table.items() if k != 0}
-        for name, table in (("M", Mm), ("D", Dm), ("K", Km))
-    }
-    mesh_only, rest = _split(system, parts)
-    if any(parts.values()) and not mesh_only.time_invariant:
-        if not floquet(mesh_only, harmonics, method=method).stable:
-            return MESH
-    if not rest.time_invariant and not floquet(rest, harmonics, method=method).stable:
-        return ASYMMETRY
-    return COMBINED
+def mechanism(model: Any, assembled: Any, harmonics: Any = None, *, method: str = "auto") -> str:
+    """The category of the instability of an assembled model (see
+    :mod:`rheolin.stability.mechanism`); ``""`` when it is stable."""
+    del harmonics, method  # the lattice method decides and names
+    res = floquet(assembled.system, method="lattice")
+    return _identify(model, assembled, res).category

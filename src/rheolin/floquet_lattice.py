@@ -1,0 +1,607 @@
+"""Floquet exponents on a harmonic lattice (docs/stability.md).
+
+For a system whose time variation comes from a few sources (gear meshes, 1x/2x of shafts)
+the dense Hill truncation ``-N..N`` in units of ``w1`` is hopeless: a hunting-tooth gearbox
+has ``w1`` = input speed / 4757 and would need millions of harmonics. Here the Hill problem is
+truncated to a lattice (:mod:`rheolin.lattice`) and solved near each mode of the
+time-averaged system:
+
+1. the exponents ``lambda_j`` of the time-averaged system (``Im >= 0``) are the *targets*;
+2. at each target ``sigma``, shift-invert Arnoldi on the lattice Hill pencil, one sparse LU of
+   the second-order operator ``Q(sigma)`` (:class:`~rheolin.hill_lattice.LatticeHill`), finds
+   the exponents nearest it; targets inside half the radius reached count as searched;
+3. of the copies ``lambda + i h w1`` of each exponent, the representative is the one whose
+   eigenvector's energy sits at the centre of the lattice (smallest energy-weighted shell);
+   copies (recognized by the shift between their most energetic harmonics), duplicates and the
+   conjugate half are removed, and the count is checked against the ``2 n`` exponents;
+4. each representative gets its left eigenvector (one LU at the exponent), a first-order
+   rounding bound and a truncation estimate: the second-order (Feshbach) correction from the
+   harmonics one coefficient step outside the lattice,
+   ``delta = u^H Q_IO Q_OO^-1 Q_OI q / (u^H Q'(lambda) q)``, ``Q_OO`` block-diagonal and
+   inverted through the averaged modes.
+
+Spurious exponents at the lattice boundary (the known failure of multi-frequency Hill
+methods) have their energy on the outer shells: a better centred copy of the same exponent
+is always preferred, and a boundary eigenvector left as a representative carries a large
+truncation estimate, which makes the verdict undecided instead of wrong.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse.linalg as spla
+
+from .hill import hill_pencil, state_scaling
+from .hill_lattice import LatticeHill
+from .lattice import Lattice
+from .system import PeriodicSystem
+
+__all__ = ["MAX_AVERAGED_DENSE", "LatticeExponents", "lattice_exponents", "lattice_memory"]
+
+log = logging.getLogger(__name__)
+
+_EPS = float(np.finfo(float).eps)
+#: Dense eigen-decomposition of the time-averaged pencil up to this size (``2 n``).
+MAX_AVERAGED_DENSE = 4000
+#: Rounding bounds are widened by this factor (as in :mod:`rheolin.floquet`).
+SAFETY = 100.0
+#: Estimated LU fill of the lattice operator (entries of the factors / entries of ``Q``).
+LU_FILL = 12.0
+#: SuperLU options for the lattice operator: column AMD with threshold pivoting that prefers
+#: the diagonal (half the fill of partial pivoting on the gearbox; the Newton step on each
+#: representative uses Q itself, so the factor's accuracy does not limit the exponents).
+SPLU: dict[str, Any] = {"permc_spec": "COLAMD", "diag_pivot_thresh": 0.1}
+#: Arnoldi: checkpoints (basis sizes) and the relative residual of an accepted Ritz pair.
+ARNOLDI_STEPS = (10, 16, 24, 36, 54, 80)
+ARNOLDI_TOL = 1e-10
+#: A target's search stops at a centred Ritz vector holding this share of its mode (of the
+#: strongest mode's weight at harmonic 0): strongly mixed modes have no single owner.
+ACCEPT_WEIGHT = 0.25
+#: Averaged exponents closer than this (relative) are searched together.
+CLUSTER_TOL = 1e-4
+#: A Ritz vector counts for its target's search when its energy centroid is at most this
+#: (0.5: split evenly between harmonic 0 and a neighbour, as in a principal resonance).
+CENTRED = 0.5 + 1e-3
+#: Eigenvectors of one value are dependent when the smallest singular value of the stacked
+#: unit vectors is below this fraction of the largest.
+DEPENDENT = 1e-3
+
+
+@dataclass
+class _Candidate:
+    lam: complex
+    y: np.ndarray  # balanced first-order right eigenvector over the lattice
+    energy: np.ndarray  # energy fraction per lattice harmonic
+    centroid: float
+    edge: float
+    top: tuple[int, int]  # the two most energetic harmonics (indices, not positions)
+    dominant: int  # averaged mode with the largest weight at harmonic 0
+    shift: int
+    weights: np.ndarray  # modal weights at harmonic 0, largest = 1
+    slack: float = 0.0  # rounding error of the dominant averaged exponent (x SAFETY)
+
+
+@dataclass
+class LatticeExponents:
+    """Representatives of the Floquet exponents on a lattice, with their diagnostics.
+
+    ``exponents`` holds one copy per exponent (the one centred on harmonic 0, not folded),
+    the conjugates included; the other arrays are aligned with it.
+    """
+
+    exponents: np.ndarray
+    bounds: np.ndarray
+    truncation: np.ndarray
+    edge: np.ndarray
+    centroid: np.ndarray
+    dominant: np.ndarray
+    partner: list[tuple[int, int]]
+    expected: int
+    averaged: np.ndarray
+    averaged_tol: np.ndarray
+    info: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def complete(self) -> bool:
+        """True when as many exponents were found as the averaged system has."""
+        return bool(self.exponents.size >= self.expected)
+
+
+class _Averaged:
+    """Eigen-decomposition of the time-averaged balanced pencil (first-order, ``2 n``)."""
+
+    def __init__(self, system: PeriodicSystem) -> None:
+        n = system.n
+        if 2 * n > MAX_AVERAGED_DENSE:
+            raise ValueError(
+                f"the lattice Floquet method needs the modes of the time-averaged system "
+                f"densely (2 n = {2 * n} > {MAX_AVERAGED_DENSE}); reduce the model "
+                "(condensed bodies) or give a dense harmonic set with method='sparse'"
+            )
+        A, B = hill_pencil(system, [0])
+        Ad, Bd = A.toarray(), B.toarray()
+        lam, W, X = sla.eig(Ad, Bd, left=True, right=True, check_finite=False)
+        finite = np.isfinite(lam)
+        self.lam = lam[finite]
+        X, W = X[:, finite], W[:, finite]
+        X = X / np.linalg.norm(X, axis=0)
+        d = np.einsum("ij,ij->j", W.conj(), Bd @ X)
+        ok = np.abs(d) > 1e3 * _EPS * np.linalg.norm(W, axis=0)
+        self.W = W / np.where(ok, d, 1.0).conj()
+        self.X = X
+        self.WB = self.W.conj().T @ Bd  # modal coordinates of a balanced vector: WB @ y
+        # first-order rounding bound of each averaged exponent (huge in a Jordan block, such
+        # as the double zero of a free rotation): copies of it scatter by as much
+        normA, normB = np.linalg.norm(Ad, 1), np.linalg.norm(Bd, 1)
+        cond = np.linalg.norm(self.W, axis=0) / np.maximum(np.abs(d), np.finfo(float).tiny)
+        self.bound = _EPS * (normA + np.abs(self.lam) * normB) * np.where(ok, cond, np.inf)
+        self.modal = bool(ok.all()) and self.lam.size == 2 * n
+        self.sq, self.sv = state_scaling(system)
+        self.n = n
+
+
+def lattice_memory(system: PeriodicSystem, lattice: Lattice, k: int = 8) -> int:
+    """Estimated peak memory [bytes] of :func:`lattice_exponents` on ``lattice``.
+
+    Counted without building anything: the entries of the lattice operator (from the block
+    patterns and the number of harmonic pairs each coefficient harmonic couples), its LU at
+    :data:`LU_FILL` times those entries, the Arnoldi basis, and the dense averaged modes.
+    """
+    from .operator import _Block
+
+    H = lattice.indices
+    n = system.n
+    nnz = 0
+    for k_h in [0, *system.coefficient_harmonics]:
+        pos = np.minimum(np.searchsorted(H, H + k_h), H.size - 1)
+        pairs = int(np.count_nonzero(H[pos] == H + k_h))
+        if not pairs:
+            continue
+        block = _Block(system.M.get(k_h), system.D.get(k_h), system.K.get(k_h), n, system.is_sparse)
+        nnz += pairs * int(block.entries()[0].size)
+    size2 = 2 * n * H.size
+    ncv = max(2 * k + 1, 20)
+    return int(
+        nnz * 16 * (6 + LU_FILL) + size2 * 16 * (ncv + 8) + (2 * n) ** 2 * 16 * 6 + 64 * 2**20
+    )
+
+
+def lattice_exponents(
+    system: PeriodicSystem,
+    lattice: Lattice,
+    *,
+    near: np.ndarray | None = None,
+) -> LatticeExponents:
+    """Representatives of the Floquet exponents of ``system`` on ``lattice``.
+
+    See the module docstring for the method. ``near`` restricts the search to the
+    time-averaged modes nearest these values (for tracking one exponent across speeds); the
+    result is then partial (``expected`` is the number of those modes).
+    """
+    t0 = time.perf_counter()
+    n, w = system.n, system.omega
+    H = lattice.indices
+    nh = H.size
+    if 0 not in set(H.tolist()):
+        raise ValueError("the lattice must contain harmonic 0")
+    avg = _Averaged(system)
+    hill = LatticeHill(system, H)
+    sq_rep, sv_rep = np.tile(avg.sq, nh), np.tile(avg.sv, nh)
+    Mconv = hill.inner.Mconv()
+    centre = lattice.position(0)
+    shell = lattice.shell.astype(float)
+    boundary = lattice.boundary
+    lam0 = avg.lam
+    scale0 = np.maximum(np.abs(lam0), w)
+    upper = np.flatnonzero(lam0.imag >= -1e-9 * scale0)
+    if near is not None:
+        picks = {int(np.argmin(np.abs(lam0 - z))) for z in np.atleast_1d(near)}
+        picks = {
+            j
+            if lam0[j].imag >= -1e-9 * scale0[j]
+            else int(np.argmin(np.abs(lam0 - np.conj(lam0[j]))))
+            for j in picks
+        }
+        upper = np.array(sorted(picks), dtype=int)
+    targets = upper[np.argsort(lam0[upper].imag, kind="stable")]
+    size = 2 * n * nh
+    pool: list[_Candidate] = []
+    shifts: list[complex] = []
+    lu_seconds = 0.0
+    arnoldi_seconds = 0.0
+    rng = np.random.default_rng(12345)
+
+    def to_unbalanced(yb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return yb[: n * nh] / sq_rep, yb[n * nh :] / sv_rep
+
+    def candidate(yb: np.ndarray, lam: complex, shift: int) -> _Candidate:
+        with np.errstate(under="ignore"):
+            e2 = np.abs(yb) ** 2
+        e = e2[: n * nh].reshape(nh, n).sum(axis=1) + e2[n * nh :].reshape(nh, n).sum(axis=1)
+        tot = e.sum()
+        e = e / tot if tot > 0 else e
+        top = np.argsort(-e, kind="stable")[:2]
+
+        def block(i: int) -> np.ndarray:
+            return np.concatenate(
+                [yb[i * n : (i + 1) * n], yb[n * nh + i * n : n * nh + (i + 1) * n]]
+            )
+
+        mw = np.abs(avg.WB @ block(centre))
+        dom = int(np.argmax(mw))
+        # rounding scatter: that of the averaged mode carrying the most energetic harmonic
+        at_top = int(np.argmax(np.abs(avg.WB @ block(int(top[0])))))
+        return _Candidate(
+            complex(lam),
+            yb,
+            e,
+            float(shell @ e),
+            float(e[boundary].sum()),
+            (int(H[top[0]]), int(H[top[-1]])),
+            dom,
+            shift,
+            mw / mw[dom] if mw[dom] > 0 else mw,
+            SAFETY * float(avg.bound[at_top]),
+        )
+
+    def search(cluster: np.ndarray) -> list[_Candidate]:
+        """Exponents of one cluster of (nearly) equal averaged exponents, centred copies."""
+        nonlocal lu_seconds, arnoldi_seconds
+        sigma = complex(np.mean(lam0[cluster]))
+        need = sum(1 if abs(lam0[c].imag) <= 1e-9 * scale0[c] else 2 for c in cluster)
+        t1 = time.perf_counter()
+        lu = _factor(hill, sigma, w)
+        sigma = lu.sigma
+        lu_seconds += time.perf_counter() - t1
+        P = hill.inner.P(sigma, w)
+        S = hill.s(sigma)
+
+        def apply(yb: np.ndarray) -> np.ndarray:
+            # balanced (A - sigma B)^-1 B y through one solve with Q(sigma)
+            xq, xv = to_unbalanced(yb)
+            q = -lu.solve(np.asarray(Mconv @ xv + P @ xq))
+            return np.concatenate([q * sq_rep, (xq + S * q) * sv_rep])
+
+        v0 = np.zeros(size, dtype=complex)
+        mix = rng.standard_normal(cluster.size) + 1j * rng.standard_normal(cluster.size)
+        v0[centre * n : (centre + 1) * n] = avg.X[:n, cluster] @ mix
+        v0[n * nh + centre * n : n * nh + (centre + 1) * n] = avg.X[n:, cluster] @ mix
+        # a little of everything: an exact eigenvector would end the Krylov space at once
+        v0 += 1e-3 * (rng.standard_normal(size) + 1j * rng.standard_normal(size)) / np.sqrt(size)
+        t2 = time.perf_counter()
+        shifts.append(sigma)
+        found_here: list[_Candidate] = []
+
+        def accept(theta: np.ndarray, vecs: np.ndarray) -> bool:
+            found_here.clear()
+            lam = sigma + 1.0 / theta
+            for i in range(theta.size):
+                found_here.append(candidate(vecs[:, i], lam[i], len(shifts) - 1))
+            mine = [
+                c
+                for c in found_here
+                if c.centroid <= CENTRED and c.weights[cluster].max() >= ACCEPT_WEIGHT
+            ]
+            satisfied[0] = _count(_select(mine, need, w, nh)) >= need
+            return satisfied[0]
+
+        satisfied = [False]
+        _arnoldi(apply, v0, accept, steps=ARNOLDI_STEPS, tol=ARNOLDI_TOL)
+        arnoldi_seconds += time.perf_counter() - t2
+        if not satisfied[0]:
+            short.append(sigma)
+        return found_here
+
+    short: list[complex] = []
+    for cluster in _clusters(lam0, targets, w):
+        pool.extend(search(cluster))
+
+    if near is None:
+        expected = int(lam0.size)
+    else:
+        real = np.abs(lam0[targets].imag) <= 1e-9 * scale0[targets]
+        expected = int(2 * np.count_nonzero(~real) + np.count_nonzero(real))
+    reps = _select(pool, expected, w, nh)
+    # left eigenvectors, error bounds and truncation estimates of the representatives
+    A_b, B_b = hill_pencil(system, H)
+    normA, normB = spla.norm(A_b, 1), spla.norm(B_b, 1)
+    del A_b
+    lams, bounds, trunc, edges, cents, doms, partners = [], [], [], [], [], [], []
+    conj_index = _conjugate_index(lam0)
+    outer = _Outer(hill, avg) if nh > 0 else None
+    for c, conj_too in reps:
+        xq, _ = to_unbalanced(c.y)
+        lam_c, xq, u, yq = _polish(hill, c.lam, xq, w)
+        c.lam = lam_c
+        # first-order vectors: right (q, s q), left (P^H u, u); balanced: R^-1 x, L^-1 y
+        xb = np.concatenate([xq * sq_rep, hill.s(lam_c) * xq * sv_rep])
+        yb = np.concatenate([yq / sq_rep, u * sv_rep])
+        denom = abs(np.vdot(yb, B_b @ xb))
+        nx, ny = np.linalg.norm(xb), np.linalg.norm(yb)
+        bound = _EPS * (normA + abs(lam_c) * normB) * nx * ny / max(denom, np.finfo(float).tiny)
+        tau = outer.estimate(lam_c, xq, u) if outer is not None else 0.0
+        part = _partner(c, H, n, avg.WB)
+        for lam_i in [c.lam, np.conj(c.lam)] if conj_too else [c.lam]:
+            lams.append(complex(lam_i))
+            bounds.append(bound)
+            trunc.append(tau)
+            edges.append(c.edge)
+            cents.append(c.centroid)
+            doms.append(c.dominant if lam_i == c.lam else conj_index[c.dominant])
+            partners.append(part if lam_i == c.lam else (-part[0], conj_index[part[1]]))
+    info = {
+        "lattice_size": nh,
+        "lattice_order": lattice.order,
+        "hill_size": size,
+        "shifts": len(shifts),
+        "lu_seconds": lu_seconds,
+        "arnoldi_seconds": arnoldi_seconds,
+        "seconds": time.perf_counter() - t0,
+        "short_searches": [complex(x) for x in short],
+    }
+    return LatticeExponents(
+        exponents=np.array(lams, dtype=complex),
+        bounds=np.array(bounds, dtype=float),
+        truncation=np.array(trunc, dtype=float),
+        edge=np.array(edges, dtype=float),
+        centroid=np.array(cents, dtype=float),
+        dominant=np.array(doms, dtype=int),
+        partner=partners,
+        expected=expected,
+        averaged=lam0,
+        averaged_tol=np.maximum(SAFETY * avg.bound, 1e-10 * np.maximum(np.abs(lam0), w)),
+        info=info,
+    )
+
+
+def _arnoldi(
+    apply: Any, v0: np.ndarray, accept: Any, *, steps: tuple[int, ...], tol: float
+) -> None:
+    """Arnoldi on ``apply`` from ``v0`` (no restarts); at each checkpoint the converged Ritz
+    pairs (residual ``<= tol |theta|``) are passed to ``accept(theta, vectors)``, which says
+    whether to stop."""
+    m_max = steps[-1]
+    size = v0.size
+    m_max = min(m_max, size)
+    V = np.empty((m_max + 1, size), dtype=complex)
+    Hm = np.zeros((m_max + 1, m_max), dtype=complex)
+    V[0] = v0 / np.linalg.norm(v0)
+    checkpoints = {min(s, m_max) for s in steps}
+    for j in range(m_max):
+        wv = apply(V[j])
+        basis = V[: j + 1]
+        h = np.conj(basis @ np.conj(wv))
+        wv = wv - h @ basis
+        h2 = np.conj(basis @ np.conj(wv))  # second Gram-Schmidt pass
+        wv = wv - h2 @ basis
+        Hm[: j + 1, j] = h + h2
+        beta = float(np.linalg.norm(wv))
+        Hm[j + 1, j] = beta
+        m = j + 1
+        ended = beta <= 1e-14 * float(np.abs(Hm[: j + 2, : j + 1]).max())
+        if not ended:
+            V[j + 1] = wv / beta
+        if m in checkpoints or ended or m == m_max:
+            theta, Svec = np.linalg.eig(Hm[:m, :m])
+            res = beta * np.abs(Svec[-1, :]) if not ended else np.zeros(m)
+            good = res <= tol * np.abs(theta)
+            if good.any():
+                vecs = V[:m].T @ Svec[:, good]
+                if accept(theta[good], vecs) or ended:
+                    return
+            if ended:
+                return
+
+
+def _conjugate_index(lam: np.ndarray) -> np.ndarray:
+    """For each eigenvalue, the index of its conjugate (itself when real); ``-1`` maps to -1."""
+    idx = np.array([int(np.argmin(np.abs(lam - np.conj(x)))) for x in lam], dtype=int)
+    return np.append(idx, -1)
+
+
+class _Shifted:
+    """A sparse LU of ``Q(sigma)`` that remembers its (possibly nudged) shift."""
+
+    def __init__(self, lu: Any, sigma: complex) -> None:
+        self.lu = lu
+        self.sigma = sigma
+
+    def solve(self, b: np.ndarray, trans: str = "N") -> np.ndarray:
+        return np.asarray(self.lu.solve(b, trans=trans))
+
+
+def _factor(hill: LatticeHill, sigma: complex, w: float) -> _Shifted:
+    """LU of ``Q(sigma)``; an exactly singular shift is moved slightly."""
+    scale = max(abs(sigma), w)
+    if abs(sigma) < 1e-9 * w:
+        sigma = complex(1e-4 * w, 1e-4 * w)
+    for attempt in range(4):
+        try:
+            return _Shifted(spla.splu(hill.Q(sigma), **SPLU), sigma)
+        except RuntimeError:  # exactly singular
+            sigma += 1e-7 * scale * (1 + 1j) * 10**attempt
+    raise RuntimeError(f"cannot factorize the lattice Hill operator near {sigma}")
+
+
+def _polish(
+    hill: LatticeHill, lam: complex, q: np.ndarray, w: float
+) -> tuple[complex, np.ndarray, np.ndarray, np.ndarray]:
+    """One LU at the exponent: inverse iteration for the right and left null vectors of
+    ``Q(lam)`` and a two-sided Newton (Rayleigh functional) step on ``lam``.
+
+    Returns ``(lam, q, u, P(lam)^H u)``.
+    """
+    lu = _factor(hill, lam, w)
+    dQ = hill.inner.dQ(lam, w)
+    q1 = lu.solve(np.asarray(dQ @ q))
+    q1 /= np.linalg.norm(q1)
+    u = lu.solve(np.asarray(dQ.conj().T @ q1), trans="H")  # a start for the left vector
+    u /= np.linalg.norm(u)
+    u = lu.solve(np.asarray(dQ.conj().T @ u), trans="H")
+    u /= np.linalg.norm(u)
+    num = np.vdot(u, hill.Q(lam) @ q1)
+    den = np.vdot(u, dQ @ q1)
+    if den != 0 and np.isfinite(num / den) and abs(num / den) < 1e-4 * max(abs(lam), w):
+        lam = lam - num / den
+    P = hill.inner.P(lam, w)
+    return complex(lam), q1, u, np.asarray(P.conj().T @ u)
+
+
+class _Outer:
+    """Second-order truncation correction from the harmonics just outside the lattice."""
+
+    def __init__(self, hill: LatticeHill, avg: _Averaged) -> None:
+        self.hill = hill
+        self.avg = avg
+        self.O, self.oi, self.io = hill.outer()
+        n = hill.n
+        self.Xq = avg.X[:n] / avg.sq[:, None]  # Tq X_top
+        self.Wv = avg.W[n:].conj() / avg.sv[:, None]  # Tv-weighted conj(W_bot)
+
+    def estimate(self, lam: complex, q: np.ndarray, u: np.ndarray) -> float:
+        hill, n, w = self.hill, self.hill.n, self.hill.w
+        if self.O.size == 0:
+            return 0.0
+        r = np.asarray(self.oi.Q(lam, w) @ q).reshape(self.O.size, n)
+        a = np.conj(np.asarray(self.io.Q(lam, w).conj().T @ u)).reshape(self.O.size, n)
+        den = np.vdot(u, hill.inner.dQ(lam, w) @ q)
+        if den == 0:
+            return float("inf")
+        s_o = lam + 1j * w * self.O.astype(float)
+        if self.avg.modal:
+            Ga = a @ self.Xq
+            Gr = r @ self.Wv
+            with np.errstate(divide="ignore", invalid="ignore"):
+                term = -np.sum(Ga * Gr / (self.avg.lam[None, :] - s_o[:, None]))
+        else:
+            term = self._direct(a, r, s_o)
+        val = abs(term / den)
+        return float(val) if np.isfinite(val) else float("inf")
+
+    def _direct(self, a: np.ndarray, r: np.ndarray, s_o: np.ndarray) -> complex:
+        """Without a complete modal basis (massless DOFs): one LU of ``Q0(s)`` per harmonic."""
+        import scipy.sparse as sp
+
+        block = self.hill.blocks[0]
+        rows, cols, (K, D, M) = block.entries()
+        n = self.hill.n
+        total = 0j
+        weight = np.linalg.norm(a, axis=1) * np.linalg.norm(r, axis=1)
+        keep = np.flatnonzero(weight > 1e-14 * max(weight.max(), np.finfo(float).tiny))
+        for i in keep:
+            s = s_o[i]
+            Q0 = sp.csc_array((K + s * D + s * s * M, (rows, cols)), shape=(n, n))
+            try:
+                z = spla.spsolve(Q0, r[i])
+            except RuntimeError:
+                return complex("inf")
+            total += a[i] @ z
+        return total
+
+
+def _partner(c: _Candidate, H: np.ndarray, n: int, WB: np.ndarray) -> tuple[int, int]:
+    """The most energetic harmonic other than 0 of a representative, and the time-averaged
+    mode that dominates the eigenvector there (``(0, -1)`` without one)."""
+    nh = H.size
+    for i in np.argsort(-c.energy, kind="stable"):
+        if H[i] != 0:
+            yh = np.concatenate(
+                [c.y[i * n : (i + 1) * n], c.y[n * nh + i * n : n * nh + (i + 1) * n]]
+            )
+            return int(H[i]), int(np.argmax(np.abs(WB @ yh)))
+    return 0, -1
+
+
+def _clusters(lam0: np.ndarray, targets: np.ndarray, w: float) -> list[np.ndarray]:
+    """Targets grouped where averaged exponents (nearly) coincide (a double eigenvalue of an
+    isotropic rotor): one search must find the exponents of the whole group."""
+    out: list[np.ndarray] = []
+    used = np.zeros(lam0.size, dtype=bool)
+    for j in targets:
+        if used[j]:
+            continue
+        near = targets[np.abs(lam0[targets] - lam0[j]) <= CLUSTER_TOL * max(abs(lam0[j]), w)]
+        near = near[~used[near]]
+        used[near] = True
+        out.append(near)
+    return out
+
+
+def _count(kept: list[tuple[_Candidate, bool]]) -> int:
+    return sum(2 if conj_too else 1 for _, conj_too in kept)
+
+
+def _select(
+    pool: list[_Candidate], expected: int, w: float, nh: int
+) -> list[tuple[_Candidate, bool]]:
+    """Representatives, best centred first, until ``expected`` exponents are accounted for.
+
+    A candidate is skipped when it is a copy of an accounted exponent (``lambda + i h w1``
+    with ``h`` the shift between their most energetic harmonics), or when it has the same
+    value as accounted ones and its eigenvector lies in their span (the same exponent found
+    again by another search; a multiple exponent has independent eigenvectors and counts
+    once per dimension). Returns ``(candidate, conjugate_is_another_exponent)`` pairs.
+    """
+    order = sorted(range(len(pool)), key=lambda i: (pool[i].centroid, pool[i].edge))
+    kept: list[tuple[_Candidate, bool]] = []
+    # (lambda, top harmonics, unit eigenvector) of every accounted exponent, conjugates too
+    known: list[tuple[complex, tuple[int, int], np.ndarray, float]] = []
+    count = 0
+    for i in order:
+        if count >= expected:
+            break
+        c = pool[i]
+        if any(_copy_of(c, lam, top, w, slack=sl) for lam, top, _, sl in known):
+            continue
+        same = [v for lam, _, v, sl in known if abs(c.lam - lam) <= _tol(c, lam, w) + sl]
+        y = c.y / np.linalg.norm(c.y)
+        if same:
+            sv = np.linalg.svd(np.column_stack([*same, y]), compute_uv=False)
+            if sv[-1] <= DEPENDENT * sv[0]:
+                continue
+        mirrored = (-c.top[0], -c.top[1])
+        selfconj = _copy_of(c, np.conj(c.lam), mirrored, w, allow_zero=True)
+        kept.append((c, not selfconj))
+        known.append((c.lam, c.top, y, c.slack))
+        count += 1
+        if not selfconj:
+            known.append((np.conj(c.lam), mirrored, _mirror(y, nh), c.slack))
+            count += 1
+    return kept
+
+
+def _mirror(y: np.ndarray, nh: int) -> np.ndarray:
+    """The eigenvector of the conjugate exponent: ``conj(y_{-h})`` (the lattice is symmetric
+    and sorted, so harmonic ``-h`` sits at the reversed position)."""
+    return np.conj(y.reshape(2, nh, -1)[:, ::-1, :].ravel())
+
+
+def _tol(c: _Candidate, lam: complex, w: float) -> float:
+    scale = max(abs(c.lam), abs(lam), w)
+    return 1e-8 * scale + 1e-3 * np.sqrt(c.edge) * scale + c.slack
+
+
+def _copy_of(
+    c: _Candidate,
+    lam: complex,
+    top: tuple[int, int],
+    w: float,
+    allow_zero: bool = False,
+    slack: float = 0.0,
+) -> bool:
+    """True when ``c.lam = lam + i h w`` for a shift ``h`` between their energetic harmonics."""
+    tol = _tol(c, lam, w) + slack
+    for tk in top:
+        for tc in c.top:
+            h = tk - tc
+            if h == 0 and not allow_zero:
+                continue
+            if abs(c.lam - lam - 1j * h * w) <= tol:
+                return True
+    return False
