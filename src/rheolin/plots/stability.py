@@ -11,6 +11,13 @@ from ._common import new_figure, save
 
 __all__ = ["plot_stability"]
 
+
+def _wrap(text: str, width: int = 38) -> str:
+    import textwrap
+
+    return "\n".join(textwrap.wrap(text, width)) or text
+
+
 RPM = 60.0 / (2.0 * np.pi)
 
 
@@ -20,7 +27,7 @@ def plot_stability(map: Any, path: str | Path) -> Path:
     Largest Floquet real part [1/s] against input speed [rpm] (symmetric-log axis so that
     damped and growing values both show), the per-speed decision tolerance as a grey band,
     unstable samples as red dots, unstable ranges shaded red and labelled with their bounds
-    and mechanism; speeds whose Hill truncation did not converge are marked with crosses.
+    and mechanism; speeds whose verdict the truncation could still flip are marked with crosses.
 
     Parameters
     ----------
@@ -54,9 +61,10 @@ def plot_stability(map: Any, path: str | Path) -> Path:
     bad = ~np.asarray(map.stable, bool)
     ax.plot(rpm[~bad], mr[~bad], "o", ms=3, color="tab:blue")
     ax.plot(rpm[bad], mr[bad], "o", ms=4, color="tab:red", label="unstable")
-    unconv = ~np.asarray(map.converged, bool)
-    if unconv.any():
-        ax.plot(rpm[unconv], mr[unconv], "x", ms=7, color="k", label="truncation not converged")
+    decided = getattr(map, "decided", np.zeros(0, bool))
+    undecided = ~np.asarray(decided, bool) if len(decided) == len(rpm) else np.zeros(len(rpm), bool)
+    if undecided.any():
+        ax.plot(rpm[undecided], mr[undecided], "x", ms=7, color="k", label="verdict undecided")
     ax.axhline(0.0, color="k", lw=0.8)
     for r in map.ranges:
         lo, hi = r.lower * RPM, r.upper * RPM
@@ -64,7 +72,7 @@ def plot_stability(map: Any, path: str | Path) -> Path:
         open_lo = "<" if r.lower_open else ""
         open_hi = ">" if r.upper_open else ""
         ax.annotate(
-            f"{open_lo}{lo:.6g} to {hi:.6g}{open_hi} rpm\n{r.mechanism}",
+            f"{open_lo}{lo:.6g} to {hi:.6g}{open_hi} rpm\n{_wrap(r.label)}",
             (0.5 * (lo + hi), 0.45),
             xycoords=("data", "axes fraction"),
             ha="center",

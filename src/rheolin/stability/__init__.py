@@ -11,17 +11,27 @@ True
 """
 
 from .campbell import CampbellResult, CriticalSpeed, campbell, order_lines
+from .mechanism import Mechanism, identify
 from .modes import AveragedModes, averaged_modes, whirl_ratio
-from .stability_map import StabilityMap, UnstableRange, mechanism, stability_map
+from .stability_map import (
+    StabilityMap,
+    UnstableRange,
+    map_from_results,
+    mechanism,
+    stability_map,
+)
 
 __all__ = [
     "AveragedModes",
     "CampbellResult",
     "CriticalSpeed",
+    "Mechanism",
     "StabilityMap",
     "UnstableRange",
     "averaged_modes",
     "campbell",
+    "identify",
+    "map_from_results",
     "mechanism",
     "order_lines",
     "stability_map",

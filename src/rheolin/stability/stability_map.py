@@ -22,7 +22,7 @@ from .mechanism import (
 )
 from .mechanism import identify as _identify
 
-__all__ = ["StabilityMap", "UnstableRange", "mechanism", "stability_map"]
+__all__ = ["StabilityMap", "UnstableRange", "map_from_results", "mechanism", "stability_map"]
 
 _EPS = float(np.finfo(float).eps)
 __categories__ = (ROTATING_DAMPING, CIRCULATORY, MESH, ASYMMETRY, COMBINED, UNIDENTIFIED)
@@ -220,7 +220,6 @@ def stability_map(
     if speeds.size < 1 or np.any(speeds <= 0) or np.any(np.diff(speeds) <= 0):
         raise ValueError("`speeds_rad_s` must be positive and strictly increasing [rad/s]")
     t0 = time.perf_counter()
-    count = [0]
 
     def truncation(system: Any) -> Any:
         if harmonics is None:
@@ -231,7 +230,6 @@ def stability_map(
 
     def evaluate(W: float, near: Any = None) -> tuple[Any, FloquetResult]:
         a = model.assemble(float(W))
-        count[0] += 1
         if near is not None:
             res = floquet(
                 a.system, method="lattice", order=order, near=near, memory_budget=memory_budget
@@ -251,6 +249,57 @@ def stability_map(
         results.append(evaluate(W)[1])
         if progress is not None:
             progress(i, results[-1])
+    smap = map_from_results(
+        model,
+        speeds,
+        results,
+        order=order,
+        refine=refine,
+        identify_mechanism=identify_mechanism,
+        memory_budget=memory_budget,
+        evaluate=evaluate,
+    )
+    smap.info["evaluations"] = smap.info.get("evaluations", 0) + speeds.size
+    smap.info["seconds"] = time.perf_counter() - t0
+    return smap
+
+
+def map_from_results(
+    model: Any,
+    speeds_rad_s: Any,
+    results: list[FloquetResult],
+    *,
+    order: int | None = None,
+    refine: float = 1e-8,
+    identify_mechanism: bool = True,
+    memory_budget: Any = None,
+    evaluate: Callable[..., tuple[Any, FloquetResult]] | None = None,
+) -> StabilityMap:
+    """The stability map from Floquet results already computed at every speed.
+
+    Used by :func:`stability_map`, and by sweeps whose workers check each speed's stability
+    as part of the steady-state solve (``Solution.floquet``): only the refinement of the
+    range bounds (tracking the growing exponent) and the naming of the mechanisms are done
+    here.
+    """
+    speeds = np.asarray(speeds_rad_s, dtype=float).ravel()
+    if len(results) != speeds.size:
+        raise ValueError(f"need one Floquet result per speed, got {len(results)} for {speeds.size}")
+    count = [0]
+
+    def default_evaluate(W: float, near: Any = None) -> tuple[Any, FloquetResult]:
+        a = model.assemble(float(W))
+        method = "lattice" if near is not None else "auto"
+        return a, floquet(
+            a.system, method=method, order=order, near=near, memory_budget=memory_budget
+        )
+
+    run = evaluate if evaluate is not None else default_evaluate
+
+    def counted(W: float, near: Any = None) -> tuple[Any, FloquetResult]:
+        count[0] += 1
+        return run(W, near)
+
     smap = StabilityMap(
         speeds=speeds,
         max_real=np.array([r.max_real for r in results]),
@@ -276,7 +325,7 @@ def stability_map(
         tracked = _tracked(lead)
 
         def margin(W: float, tracked: Any = tracked) -> float:
-            return _margin(evaluate(W, near=tracked)[1])
+            return _margin(counted(W, tracked)[1])
 
         lo, hi = speeds[i], speeds[j]
         if i > 0:
@@ -286,8 +335,8 @@ def stability_map(
         detail = None
         category = UNIDENTIFIED
         if identify_mechanism:
-            a, res = evaluate(speeds[worst]) if lead.method != "lattice" else (None, lead)
-            if res.method != "lattice":  # the dense method has no partner harmonics
+            a, res = (None, lead) if lead.method == "lattice" else (None, None)
+            if res is None:  # the dense method has no partner harmonics
                 a, res = evaluate_lattice(model, speeds[worst], order, memory_budget)
                 count[0] += 1
             if a is None:
@@ -308,7 +357,6 @@ def stability_map(
         i = j + 1
     smap.info = {
         "evaluations": count[0],
-        "seconds": time.perf_counter() - t0,
         "largest_lattice": max(
             (len(r.lattice) for r in results if r.lattice is not None), default=0
         ),
