@@ -197,10 +197,27 @@ class FloquetResult:
             return False
         lam, tol = self.exponents, self.tolerances
         reach = TRUNCATION_SAFETY * self.truncation
+        # Liouville: the real parts of all 2 n exponents sum to -mean tr(M^-1 D); a truncation
+        # that moved exponents more than their estimates say shows here
+        target, unc = self.info.get("liouville", (float("nan"), float("inf")))
+        if np.isfinite(target):
+            spread = self.info.get("uncertainty", reach)
+            slack = float(np.sum(spread) + np.sum(tol)) + unc + 1e-10 * float(np.sum(np.abs(lam)))
+            if abs(float(np.sum(lam.real)) - target) > slack:
+                return False
         if not self.stable:
-            return bool(np.any(lam.real > tol + reach))
+            sure = (lam.real > tol + reach) & ~self.info.get("unresolved", np.zeros(lam.size, bool))
+            return bool(np.any(sure))
+        gap = self.info.get("split_gap", np.full(lam.size, np.inf))
+        near_split = gap < 2.0 * reach
         loose = self.truncation > tol
-        return bool(np.all(~loose | (lam.real + reach < 0)))
+        unresolved = self.info.get("unresolved", np.zeros(lam.size, bool))
+        certified = self.info.get("certified", np.zeros(lam.size, bool))
+        if np.any(unresolved & ~certified):
+            return False
+        split_clear = lam.real + SPLIT_FACTOR * (reach + gap) < 0
+        clear = np.where(near_split, split_clear, lam.real + reach < 0)
+        return bool(np.all(~loose | clear | certified))
 
     @property
     def leading(self) -> complex:
@@ -412,16 +429,15 @@ def _lattice_auto(
             res2 = _floquet_lattice(system, finer, budget=budget)
             res2.info["refined_from"] = p
             return res2
-        res.info["note"] = (
-            f"undecided at lattice order {p}; order {p + 1} would exceed the memory budget"
-        )
+        more = f"undecided at lattice order {p}; order {p + 1} would exceed the memory budget"
+        res.info["note"] = f"{note}; {more}" if note else more
     return res
 
 
 def _floquet_lattice(
     system: PeriodicSystem, lattice: Lattice, *, budget: Any, near: Any = None
 ) -> FloquetResult:
-    from .floquet_lattice import lattice_exponents, lattice_memory
+    from .floquet_lattice import confirm_unresolved, lattice_exponents, lattice_memory
 
     est = lattice_memory(system, lattice)
     _check_budget(
@@ -433,10 +449,16 @@ def _floquet_lattice(
     )
     with np.errstate(under="ignore"), _single_thread_blas():
         out = lattice_exponents(system, lattice, near=near)
+        if near is None and np.any(out.unresolved & ~out.certified):
+            finer = _finer(system, lattice)
+            if finer is not None and lattice_memory(system, finer) <= resolve_budget(budget):
+                out = confirm_unresolved(system, out, finer)
     w = system.omega
     res = _result(out.exponents, out.bounds, out.edge, w, "lattice", info=out.info)
     order = np.argsort(-out.exponents.real, kind="stable")
     res.truncation = out.truncation[order]
+    res.info["order"] = out.order[order]
+    res.info["uncertainty"] = out.uncertainty[order]
     res.dominant = out.dominant[order]
     res.partner = [out.partner[i] for i in order]
     res.complete = out.complete and near is None
@@ -445,7 +467,26 @@ def _floquet_lattice(
     res.averaged_tol = out.averaged_tol
     res.info["memory_estimate"] = est
     res.info["centroid"] = out.centroid[order]
+    res.info["split_gap"] = out.split_gap[order]
+    res.info["unresolved"] = out.unresolved[order]
+    res.info["certified"] = out.certified[order]
+    if "confirmed" in out.info:
+        res.info["confirmed"] = out.info["confirmed"]
+    res.info["liouville"] = out.liouville
     return res
+
+
+def _finer(system: PeriodicSystem, lattice: Lattice) -> Lattice | None:
+    """The lattice of the next order with the same steps (None past ``max_size``)."""
+    from .lattice import harmonic_lattice
+
+    steps = dict(zip(lattice.generators, lattice.costs, strict=True))
+    if not steps:
+        return None
+    try:
+        return harmonic_lattice(steps, lattice.order + 1, max_size=10**6)
+    except ValueError:
+        return None
 
 
 class _single_thread_blas:

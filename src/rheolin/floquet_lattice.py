@@ -49,6 +49,12 @@ log = logging.getLogger(__name__)
 _EPS = float(np.finfo(float).eps)
 #: Dense eigen-decomposition of the time-averaged pencil up to this size (``2 n``).
 MAX_AVERAGED_DENSE = 4000
+#: A representative with more energy than this on the outer shell is not resolved by the
+#: truncation: its verdict comes from the Gershgorin discs of its modes.
+UNRESOLVED_EDGE = 0.1
+#: Unresolved exponents are confirmed when a finer lattice moves their real part by less
+#: than ``1 / TRUNCATION_SAFETY`` of it.
+TRUNCATION_SAFETY = 10.0
 #: Rounding bounds are widened by this factor (as in :mod:`rheolin.floquet`).
 SAFETY = 100.0
 #: Estimated LU fill of the lattice operator (entries of the factors / entries of ``Q``).
@@ -85,6 +91,10 @@ class _Candidate:
     shift: int
     weights: np.ndarray  # modal weights at harmonic 0, largest = 1
     slack: float = 0.0  # rounding error of the dominant averaged exponent (x SAFETY)
+    families: tuple[int, ...] = ()  # clusters it can stand for, most likely first
+    forced: bool = False  # taken only to fill its cluster (see _fill)
+    search: int = -1  # the cluster whose search found it
+    home: int = -1  # the cluster it stands for
 
 
 @dataclass
@@ -105,6 +115,13 @@ class LatticeExponents:
     expected: int
     averaged: np.ndarray
     averaged_tol: np.ndarray
+    split_gap: np.ndarray
+    certified: np.ndarray
+    centre: np.ndarray
+    unresolved: np.ndarray
+    order: np.ndarray
+    uncertainty: np.ndarray
+    liouville: tuple[float, float]
     info: dict[str, Any] = field(default_factory=dict)
 
     @property
@@ -236,7 +253,17 @@ def lattice_exponents(
         mw = np.abs(avg.WB @ block(centre))
         dom = int(np.argmax(mw))
         # rounding scatter: that of the averaged mode carrying the most energetic harmonic
-        at_top = int(np.argmax(np.abs(avg.WB @ block(int(top[0])))))
+        mt = np.abs(avg.WB @ block(int(top[0])))
+        at_top = int(np.argmax(mt))
+        # the clusters it may stand for: modes carrying its energy at 0 or at its top harmonic
+        share = np.maximum(mw / max(mw.max(), 1e-300), mt / max(mt.max(), 1e-300))
+        fam: list[int] = []
+        for m in np.argsort(-share, kind="stable"):
+            if share[m] < ACCEPT_WEIGHT:
+                break
+            f = int(family_of[m])
+            if f >= 0 and f not in fam:
+                fam.append(f)
         return _Candidate(
             complex(lam),
             yb,
@@ -248,13 +275,25 @@ def lattice_exponents(
             shift,
             mw / mw[dom] if mw[dom] > 0 else mw,
             SAFETY * float(avg.bound[at_top]),
+            tuple(fam),
         )
 
-    def search(cluster: np.ndarray) -> list[_Candidate]:
+    def share(c: _Candidate, cid: int) -> float:
+        """Energy fraction of the cluster's modes (and their conjugates) over all harmonics."""
+        blocks = np.concatenate(
+            [c.y[: n * nh].reshape(nh, n), c.y[n * nh :].reshape(nh, n)], axis=1
+        )
+        modal = np.abs(blocks @ avg.WB.T) ** 2
+        mine = np.flatnonzero(family_of == cid)
+        total = modal.sum()
+        return float(modal[:, mine].sum() / total) if total > 0 else 0.0
+
+    def search(cid: int) -> list[_Candidate]:
         """Exponents of one cluster of (nearly) equal averaged exponents, centred copies."""
         nonlocal lu_seconds, arnoldi_seconds
+        cluster = clusters[cid]
         sigma = complex(np.mean(lam0[cluster]))
-        need = sum(1 if abs(lam0[c].imag) <= 1e-9 * scale0[c] else 2 for c in cluster)
+        need = quotas[cid]
         t1 = time.perf_counter()
         lu = _factor(hill, sigma, w)
         sigma = lu.sigma
@@ -283,39 +322,58 @@ def lattice_exponents(
             lam = sigma + 1.0 / theta
             for i in range(theta.size):
                 found_here.append(candidate(vecs[:, i], lam[i], len(shifts) - 1))
-            mine = [
-                c
-                for c in found_here
-                if c.centroid <= CENTRED and c.weights[cluster].max() >= ACCEPT_WEIGHT
-            ]
-            satisfied[0] = _count(_select(mine, need, w, nh)) >= need
+            mine = [c for c in found_here if c.centroid <= CENTRED and cid in c.families]
+            satisfied[0] = _count(_select(mine, {cid: need}, w, nh)) >= need
             return satisfied[0]
 
         satisfied = [False]
         _arnoldi(apply, v0, accept, steps=ARNOLDI_STEPS, tol=ARNOLDI_TOL)
         arnoldi_seconds += time.perf_counter() - t2
+        for c in found_here:
+            c.search = cid
         if not satisfied[0]:
             short.append(sigma)
         return found_here
 
     short: list[complex] = []
-    for cluster in _clusters(lam0, targets, w):
-        pool.extend(search(cluster))
+    clusters = _clusters(lam0, targets, w)
+    quotas = {
+        i: sum(1 if abs(lam0[c].imag) <= 1e-9 * scale0[c] else 2 for c in cl)
+        for i, cl in enumerate(clusters)
+    }
+    family_of = np.full(lam0.size, -1, dtype=int)
+    for i, cl in enumerate(clusters):
+        family_of[cl] = i
+    for m in np.flatnonzero(family_of < 0):  # the conjugates stand for their targets
+        family_of[m] = family_of[int(np.argmin(np.abs(lam0 - np.conj(lam0[m]))))]
+    for cid in range(len(clusters)):
+        pool.extend(search(cid))
 
-    if near is None:
-        expected = int(lam0.size)
-    else:
-        real = np.abs(lam0[targets].imag) <= 1e-9 * scale0[targets]
-        expected = int(2 * np.count_nonzero(~real) + np.count_nonzero(real))
-    reps = _select(pool, expected, w, nh)
+    expected = int(sum(quotas.values())) if near is not None else int(lam0.size)
+    reps = _select(pool, quotas, w, nh, share=share)
     # left eigenvectors, error bounds and truncation estimates of the representatives
     A_b, B_b = hill_pencil(system, H)
     normA, normB = spla.norm(A_b, 1), spla.norm(B_b, 1)
     del A_b
     lams, bounds, trunc, edges, cents, doms, partners = [], [], [], [], [], [], []
+    certified: list[bool] = []
+    centres: list[complex] = []
+    spread: list[float] = []
     conj_index = _conjugate_index(lam0)
     outer = _Outer(hill, avg) if nh > 0 else None
+    radius: dict[int, float] = {}
     for c, conj_too in reps:
+        # a representative the truncation does not resolve (its energy on the outer shells,
+        # or taken only to fill its cluster) is judged by the Gershgorin discs of its modes
+        unresolved = c.forced or c.edge > UNRESOLVED_EDGE
+        ok = False
+        if unresolved:
+            modes = np.flatnonzero(family_of == c.search) if c.search >= 0 else np.zeros(0, int)
+            need_r = [int(m) for m in modes if int(m) not in radius]
+            if need_r:
+                radius.update(zip(need_r, _gershgorin(system, avg, need_r), strict=True))
+            ok = bool(modes.size) and all(lam0[m].real + radius[int(m)] < 0 for m in modes)
+        disc = max((radius[int(m)] for m in modes), default=0.0) if unresolved and ok else 0.0
         xq, _ = to_unbalanced(c.y)
         lam_c, xq, u, yq = _polish(hill, c.lam, xq, w)
         c.lam = lam_c
@@ -335,6 +393,11 @@ def lattice_exponents(
             cents.append(c.centroid)
             doms.append(c.dominant if lam_i == c.lam else conj_index[c.dominant])
             partners.append(part if lam_i == c.lam else (-part[0], conj_index[part[1]]))
+            certified.append(ok if unresolved else False)
+            spread.append(max(TRUNCATION_SAFETY * tau, disc))
+            members = clusters[c.home] if c.home >= 0 else np.zeros(0, int)
+            mid = complex(np.mean(lam0[members])) if members.size else complex("nan")
+            centres.append(mid if lam_i == c.lam else complex(np.conj(mid)))
     info = {
         "lattice_size": nh,
         "lattice_order": lattice.order,
@@ -356,6 +419,16 @@ def lattice_exponents(
         expected=expected,
         averaged=lam0,
         averaged_tol=np.maximum(SAFETY * avg.bound, 1e-10 * np.maximum(np.abs(lam0), w)),
+        split_gap=_split_gaps(np.array(lams, dtype=complex), H, w),
+        certified=np.array(certified, dtype=bool),
+        centre=np.array(centres, dtype=complex),
+        order=np.full(len(lams), lattice.order, dtype=int),
+        uncertainty=np.array(spread, dtype=float),
+        unresolved=np.array(
+            [c.forced or c.edge > UNRESOLVED_EDGE for c, cj in reps for _ in range(2 if cj else 1)],
+            dtype=bool,
+        ),
+        liouville=liouville_sum(system),
         info=info,
     )
 
@@ -397,6 +470,173 @@ def _arnoldi(
                     return
             if ended:
                 return
+
+
+def confirm_unresolved(
+    system: PeriodicSystem, out: LatticeExponents, finer: Lattice
+) -> LatticeExponents:
+    """Settle the unresolved, uncertified representatives on a finer lattice.
+
+    Their clusters are searched again on ``finer`` (only near them). Where the finer lattice
+    resolves a cluster, its exponents replace the coarse ones (each exponent keeps its own
+    ``order``); where it does not either, the cluster is confirmed when its largest real
+    part is negative at both orders and changes by less than ``1 / TRUNCATION_SAFETY`` of
+    its size (the verdict does not move with the truncation). Records
+    ``info["confirmed"]``.
+    """
+    todo = out.unresolved & ~out.certified
+    if not todo.any():
+        return out
+    centres = np.unique(out.centre[todo & (out.centre.imag >= 0)])
+    centres = centres[np.isfinite(centres)]
+    if centres.size == 0:
+        return out
+    fine = lattice_exponents(system, finer, near=centres)
+    fields = (
+        "exponents", "bounds", "truncation", "edge", "centroid", "dominant", "certified",
+        "centre", "unresolved", "order", "uncertainty",
+    )  # fmt: skip
+    keep = np.ones(out.exponents.size, dtype=bool)
+    take = np.zeros(fine.exponents.size, dtype=bool)
+    replaced = confirmed = 0
+
+    def members(arr: np.ndarray, z: complex) -> np.ndarray:
+        tol = CLUSTER_TOL * max(abs(z), system.omega)
+        return (np.abs(arr - z) <= tol) | (np.abs(arr - np.conj(z)) <= tol)
+
+    every = np.any([members(out.centre, z) for z in centres], axis=0)
+    there_all = np.any([members(fine.centre, z) for z in centres], axis=0)
+    if not fine.unresolved[there_all].any() and there_all.sum() == every.sum():
+        # the finer lattice resolves every cluster: take all of them (their attribution to
+        # one cluster or another may differ between orders; the set is what counts)
+        keep &= ~every
+        take |= there_all
+        replaced = int(centres.size)
+        centres = centres[:0]
+    for z in centres:
+        tol = CLUSTER_TOL * max(abs(z), system.omega)
+        mine = (np.abs(out.centre - z) <= tol) | (np.abs(out.centre - np.conj(z)) <= tol)
+        there = (np.abs(fine.centre - z) <= tol) | (np.abs(fine.centre - np.conj(z)) <= tol)
+        if not there.any():
+            continue
+        if not fine.unresolved[there].any() and there.sum() == mine.sum():
+            keep &= ~mine
+            take |= there
+            replaced += 1
+            continue
+        if there.sum() != mine.sum():
+            continue  # the finer search did not account for the same exponents
+        # unresolved at both orders: confirmed only when every exponent of the cluster stays
+        # put (real and imaginary part) to a tenth of its distance from the axis
+        coarse, finer_l = out.exponents[mine], fine.exponents[there]
+        moved = max(float(np.min(np.abs(finer_l - z0))) for z0 in coarse)
+        worst = float(max(coarse.real.max(), finer_l.real.max()))
+        if worst < 0 and TRUNCATION_SAFETY * moved < -worst:
+            hit = mine & out.unresolved
+            out.certified[hit] = True
+            out.uncertainty[hit] = np.maximum(out.uncertainty[hit], TRUNCATION_SAFETY * moved)
+            confirmed += 1
+    for name in fields:
+        setattr(out, name, np.concatenate([getattr(out, name)[keep], getattr(fine, name)[take]]))
+    out.partner = [p for p, k in zip(out.partner, keep, strict=True) if k] + [
+        p for p, t in zip(fine.partner, take, strict=True) if t
+    ]
+    out.split_gap = _split_gaps(out.exponents, finer.indices, system.omega)
+    out.info["confirmed"] = {
+        "order": finer.order,
+        "clusters": int(centres.size),
+        "replaced": replaced,
+        "confirmed": confirmed,
+    }
+    return out
+
+
+def _gershgorin(system: PeriodicSystem, avg: _Averaged, modes: list[int]) -> list[float]:
+    """Gershgorin radii of time-averaged modes in the modal Hill matrix of the infinite
+    lattice: ``sum_k sum_m |w_j^H E_k x_m|`` over every coefficient harmonic ``k`` (rows of
+    the balanced first-order coupling in modal coordinates, ``M_k`` at the row's local
+    frequency ``lambda_j - i k w1``). Every Hill exponent lies in the union of the discs of
+    radius ``R_j`` about the copies ``lambda_j - i h w1``, for any truncation."""
+    import scipy.sparse as sp
+
+    n, w = system.n, system.omega
+    Tq, Tv = sp.diags_array(1.0 / avg.sq), sp.diags_array(1.0 / avg.sv)
+    Wr = avg.W[:, modes].conj().T  # rows of the modal transform
+    out = np.zeros(len(modes))
+    for k in system.coefficient_harmonics:
+        Kk = sp.csr_array(Tv @ sp.csr_array(system.K[k]) @ Tq) if k in system.K else None
+        Dk = sp.csr_array(Tv @ sp.csr_array(system.D[k]) @ Tv) if k in system.D else None
+        Mk = sp.csr_array(Tv @ sp.csr_array(system.M[k]) @ Tv) if k in system.M else None
+        low = Wr[:, n:]  # the couplings act on the v rows
+        part = np.zeros((len(modes), 2 * n), dtype=complex)
+        if Kk is not None:
+            part[:, :n] += np.asarray((Kk.T @ low.T).T)
+        if Dk is not None:
+            part[:, n:] += np.asarray((Dk.T @ low.T).T)
+        if Mk is not None:
+            s = avg.lam[modes] - 1j * k * w
+            part[:, n:] += s[:, None] * np.asarray((Mk.T @ low.T).T)
+        out += np.abs(part @ avg.X).sum(axis=1)
+    return out.tolist()
+
+
+def _split_gaps(lam: np.ndarray, H: np.ndarray, w: float) -> np.ndarray:
+    """Distance of each exponent to the nearest copy of its conjugate at a lattice shift
+    (``|2 Im lambda - h w1|``, ``h`` in the lattice): where a complex pair can collide with it
+    and split into two exponents of different real parts. Zero for locked (self-conjugate)
+    exponents, whose partner is the other locked one: there the gap is their real distance."""
+    out = np.empty(lam.size)
+    hw = np.sort(H.astype(float) * w)
+    for i, z in enumerate(lam):
+        target = 2.0 * z.imag
+        j = np.clip(np.searchsorted(hw, target), 1, hw.size - 1) if hw.size > 1 else 0
+        near = hw[max(j - 1, 0) : j + 1]
+        gap = float(np.min(np.abs(near - target))) if near.size else np.inf
+        if gap <= 1e-9 * max(abs(z), w):  # locked: the partner is another locked exponent
+            locked = [
+                abs(z.real - x.real)
+                for k, x in enumerate(lam)
+                if (k != i and abs(2.0 * x.imag - target) <= 1e-6 * max(abs(z), w))
+                or (k != i and np.min(np.abs(hw - (x.imag + z.imag))) <= 1e-6 * max(abs(z), w))
+            ]
+            gap = min(locked) if locked else np.inf
+        out[i] = gap
+    return out
+
+
+def liouville_sum(system: PeriodicSystem) -> tuple[float, float]:
+    """``sum Re lambda`` over all ``2 n`` Floquet exponents by Liouville's formula,
+    ``-mean_t tr(M(t)^-1 D(t))``, and an uncertainty; ``(nan, inf)`` when ``M_0`` is singular
+    or too large to invert densely.
+
+    With a time-varying ``M`` the mean is expanded to second order in ``M_k``; the size of
+    the second-order terms is returned as the uncertainty (the neglected terms are smaller).
+    """
+    n = system.n
+    M0 = system.M.get(0)
+    if M0 is None or n > MAX_AVERAGED_DENSE // 2:
+        return float("nan"), float("inf")
+
+    def dense(x: Any) -> np.ndarray:
+        return x.toarray() if hasattr(x, "toarray") else np.asarray(x)
+
+    try:
+        Minv = np.linalg.inv(dense(M0))
+    except np.linalg.LinAlgError:
+        return float("nan"), float("inf")
+    if not np.all(np.isfinite(Minv)) or np.linalg.cond(dense(M0)) > 1e12:
+        return float("nan"), float("inf")
+    D0 = dense(system.D[0]) if 0 in system.D else np.zeros((n, n))
+    value = float(np.trace(Minv @ D0).real)
+    second = 0.0
+    for k, Mk in system.M.items():
+        if k == 0:
+            continue
+        A = Minv @ dense(Mk)
+        term = -np.trace(A @ Minv @ dense(system.D[-k])) if -k in system.D else 0.0
+        term = term + np.trace(A @ Minv @ dense(system.M[-k]) @ Minv @ D0)
+        second += float(np.real(term))
+    return -(value + second), abs(second) + 1e-12 * abs(value)
 
 
 def _conjugate_index(lam: np.ndarray) -> np.ndarray:
@@ -538,25 +778,34 @@ def _count(kept: list[tuple[_Candidate, bool]]) -> int:
 
 
 def _select(
-    pool: list[_Candidate], expected: int, w: float, nh: int
+    pool: list[_Candidate],
+    quotas: dict[int, int],
+    w: float,
+    nh: int,
+    share: Any = None,
 ) -> list[tuple[_Candidate, bool]]:
-    """Representatives, best centred first, until ``expected`` exponents are accounted for.
+    """Representatives, best centred first, each standing for one cluster of targets.
 
     A candidate is skipped when it is a copy of an accounted exponent (``lambda + i h w1``
-    with ``h`` the shift between their most energetic harmonics), or when it has the same
-    value as accounted ones and its eigenvector lies in their span (the same exponent found
-    again by another search; a multiple exponent has independent eigenvectors and counts
-    once per dimension). Returns ``(candidate, conjugate_is_another_exponent)`` pairs.
+    with ``h`` the shift between their most energetic harmonics), when it has the same value
+    as accounted ones and its eigenvector lies in their span (the same exponent found again;
+    a multiple exponent has independent eigenvectors and counts once per dimension), or
+    when every cluster it can stand for is full (so a copy that escaped recognition cannot
+    take the place of another mode's exponent). Returns ``(candidate,
+    conjugate_is_another_exponent)`` pairs.
     """
     order = sorted(range(len(pool)), key=lambda i: (pool[i].centroid, pool[i].edge))
+    left = dict(quotas)
     kept: list[tuple[_Candidate, bool]] = []
-    # (lambda, top harmonics, unit eigenvector) of every accounted exponent, conjugates too
+    # (lambda, top harmonics, unit eigenvector, slack) of every accounted exponent
     known: list[tuple[complex, tuple[int, int], np.ndarray, float]] = []
-    count = 0
     for i in order:
-        if count >= expected:
+        if not any(v > 0 for v in left.values()):
             break
         c = pool[i]
+        home = [f for f in c.families if left.get(f, 0) > 0]
+        if not home:
+            continue
         if any(_copy_of(c, lam, top, w, slack=sl) for lam, top, _, sl in known):
             continue
         same = [v for lam, _, v, sl in known if abs(c.lam - lam) <= _tol(c, lam, w) + sl]
@@ -569,11 +818,53 @@ def _select(
         selfconj = _copy_of(c, np.conj(c.lam), mirrored, w, allow_zero=True)
         kept.append((c, not selfconj))
         known.append((c.lam, c.top, y, c.slack))
-        count += 1
+        left[home[0]] -= 1
+        c.home = home[0]
         if not selfconj:
             known.append((np.conj(c.lam), mirrored, _mirror(y, nh), c.slack))
-            count += 1
+            # the conjugate counts for the same cluster, or for another one with room
+            spare = [f for f in home if left.get(f, 0) > 0]
+            if spare:
+                left[spare[0]] -= 1
+    if share is not None:
+        _fill(pool, left, kept, known, w, share)
     return kept
+
+
+def _fill(
+    pool: list[_Candidate],
+    left: dict[int, int],
+    kept: list[tuple[_Candidate, bool]],
+    known: list[tuple[complex, tuple[int, int], np.ndarray, float]],
+    w: float,
+    share: Any,
+) -> None:
+    """Clusters still without their exponents (strongly mixed modes whose copies the copy
+    test cannot tell apart at this truncation) take, from their own search, the candidate
+    whose eigenvector carries most of the cluster's modes summed over all harmonics
+    (``share(candidate, cluster)``), not the same eigenpair as an accounted one."""
+    for cid, room in left.items():
+        while room > 0:
+            own = [
+                c
+                for c in pool
+                if c.search == cid
+                and not any(abs(c.lam - lam) <= _tol(c, lam, w) + sl for lam, _, _, sl in known)
+            ]
+            if not own:
+                break
+            best = max(own, key=lambda c: share(c, cid) / (1.0 + c.centroid))
+            selfconj = _copy_of(
+                best, np.conj(best.lam), (-best.top[0], -best.top[1]), w, allow_zero=True
+            )
+            kept.append((best, not selfconj))
+            known.append((best.lam, best.top, best.y / np.linalg.norm(best.y), best.slack))
+            if not selfconj:
+                known.append((np.conj(best.lam), best.top, best.y, best.slack))
+            best.forced = True
+            best.home = cid
+            room -= 1 if selfconj else 2
+        left[cid] = room
 
 
 def _mirror(y: np.ndarray, nh: int) -> np.ndarray:

@@ -37,6 +37,7 @@ __all__ = [
     "MESH",
     "ROTATING_DAMPING",
     "Mechanism",
+    "classify",
     "generator_table",
     "identify",
 ]
@@ -139,23 +140,50 @@ def _has_rotating_damping(model: Any) -> bool:
 
 
 def identify(model: Any, assembled: Any, result: Any) -> Mechanism:
+    """The mechanism of the leading exponent of a lattice :class:`~rheolin.FloquetResult`
+    of an assembled model (the generators are its meshes and rotating bodies)."""
+    return classify(
+        result,
+        generator_table(assembled),
+        assembled.system.omega,
+        rotating_damping=_has_rotating_damping(model),
+    )
+
+
+def classify(
+    result: Any,
+    generators: list[tuple[str, int, str]],
+    omega: float,
+    *,
+    rotating_damping: bool = False,
+) -> Mechanism:
     """The mechanism of the leading exponent of a lattice :class:`~rheolin.FloquetResult`.
 
-    ``result`` must come from the lattice method (it carries the partner harmonics and the
-    time-averaged modes); for a stable result the category is ``""``.
+    Parameters
+    ----------
+    result
+        From the lattice method (it carries the partner harmonics and the time-averaged
+        modes); a stable result gives the category ``""``.
+    generators
+        ``(label, harmonic, kind)`` with kind ``"mesh"`` or ``"body"``
+        (:func:`generator_table` for a model).
+    omega
+        The base frequency ``w1`` [rad/s].
+    rotating_damping
+        The system has rotating damping (names a time-invariant instability).
     """
     lam0 = result.averaged
-    w = assembled.system.omega
+    w = omega
     if result.stable:
         return Mechanism("")
     lead = complex(result.exponents[0])
     tol = float(result.tolerances[0]) if result.tolerances.size else 0.0
     atol = result.averaged_tol if result.averaged_tol.size == lam0.size else np.full(lam0.size, tol)
     if lam0.size and bool(np.any(lam0.real > atol)):
-        cat = ROTATING_DAMPING if _has_rotating_damping(model) else CIRCULATORY
+        cat = ROTATING_DAMPING if rotating_damping else CIRCULATORY
         return Mechanism(cat, "time-invariant", (), "", lead)
     h, mode_h = result.partner[0] if result.partner else (0, -1)
-    table = generator_table(assembled)
+    table = generators
     coef = _decompose(h, table)
     if coef is None:
         return Mechanism(UNIDENTIFIED, "", (), f"partner harmonic {h} (x {w:.4g} rad/s)", lead)
