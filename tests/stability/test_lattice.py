@@ -30,7 +30,7 @@ from rheolin.lattice import harmonic_lattice, system_lattice
 from rheolin.stability.mechanism import MESH, classify
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "core"))
-from cases import Jeffcott, integrate  # noqa: E402
+from cases import Jeffcott, integrate
 
 
 # --------------------------------------------------------------------------- helpers
@@ -287,7 +287,7 @@ def test_hill_pencil_is_linear_in_the_harmonic_count() -> None:
     s = mathieu(1.0, 0.3, 0.05, w=1.0)
     H = np.arange(-100_000, 100_001)
     tracemalloc.start()
-    A, B = hill_pencil(s, H)
+    A, _ = hill_pencil(s, H)
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     assert A.shape == (400_002, 400_002) and A.nnz < 10 * A.shape[0]
