@@ -200,6 +200,29 @@ class SpeedTemplate:
         for c in (self._M, self._D, self._K):
             c.freeze()
 
+    @property
+    def time_invariant(self) -> bool:
+        """True when no coefficient has a harmonic ``k != 0`` (at any speed)."""
+        return not any(k for c in (self._M, self._D, self._K) for k in c.patterns)
+
+    def mean_polynomials(self) -> dict[str, np.ndarray]:
+        """Dense ``X_0^(p)`` of ``M, D, K`` (shape ``(3, n, n)``, power ``p`` of ``w1`` first).
+
+        For batched solves of small time-invariant models over many speeds.
+        """
+        out = {}
+        for c in (self._M, self._D, self._K):
+            X = np.zeros((_POWERS, self.n_dof, self.n_dof))
+            if 0 in c.patterns:
+                rows, cols, values = c.patterns[0]
+                X[:, rows, cols] = values
+            out[c.name] = X
+        return out
+
+    def load_polynomials(self) -> dict[int, np.ndarray]:
+        """``{k: f_k^(p)}`` for the load harmonics ``k >= 0`` (shape ``(3, n)`` each)."""
+        return {k: v.copy() for k, v in self._loads.items()}
+
     def system(self, w1: float) -> PeriodicSystem:
         """The periodic system at base frequency ``w1`` [rad/s]."""
         f: dict[int, np.ndarray] = {}

@@ -13,6 +13,7 @@ from typing import Any
 from ..harmonics import HarmonicSet, TruncationWarning
 from ..mechanics.assembly import Assembled
 from ..mechanics.model import Model
+from ..mechanics.template import SpeedTemplate
 from ..solution import Solution
 from ..solvers import solve
 from ..solvers.solve import AUTO_STABILITY_SIZE
@@ -82,8 +83,15 @@ def solve_point(
     rtol: float = 1e-10,
     stability: bool | None = None,
     callback: Any = None,
+    template: SpeedTemplate | None = None,
+    x0: Any = None,
+    backend: str = "auto",
 ) -> OperatingPoint:
     """Assemble ``model`` at input ``speed`` [rad/s] and solve for the periodic steady state.
+
+    ``template`` (``model.speed_template()``) skips re-reading the model at every speed of a
+    sweep; ``x0`` (e.g. the solution at the previous speed) starts the iterative solver;
+    ``backend`` is passed to :func:`rheolin.solve`.
 
     ``stability=None`` checks Floquet stability only when the dense Hill problem is small
     (as :func:`rheolin.solve`); the size test is made here first, without building the
@@ -96,7 +104,7 @@ def solve_point(
     (True, None)
     """
     t0 = time.perf_counter()
-    a = model.assemble(speed)
+    a = (template or model.speed_template()).assemble(speed)
     hset = harmonic_set(a, order, max_order)
     skip = stability is None and _hill_size(a) > AUTO_STABILITY_SIZE
     sol = solve(
@@ -106,6 +114,8 @@ def solve_point(
         rtol=rtol,
         callback=callback,
         stability=False if skip else stability,
+        x0=x0,
+        backend=backend,
     )
     if skip:
         sol.message += "; stability not checked (system too large for the dense Hill check)"

@@ -92,6 +92,19 @@ MAX_REFINEMENTS = 3
 Step = Callable[[np.ndarray, "np.ndarray | None"], tuple[np.ndarray, int, list[float]]]
 
 
+def _better_than_zero(
+    apply: Callable[[np.ndarray], np.ndarray],
+    rhs: np.ndarray,
+    x0: np.ndarray | None,
+    norm: Callable[[np.ndarray], float],
+) -> np.ndarray | None:
+    """``x0`` if its residual is below that of zero (``||rhs||``), else None: a guess from
+    a distant speed must not make GMRES start worse than from scratch."""
+    if x0 is None or not norm(rhs - apply(x0)) < norm(rhs):
+        return None
+    return x0
+
+
 def _support_step(op: HarmonicBalance, opts: Options) -> Step:
     """GMRES on the support of ``dA`` (see the module); returns ``F, x0 -> (Q, info, hist)``."""
     rows, cols = op.support
@@ -105,6 +118,7 @@ def _support_step(op: HarmonicBalance, opts: Options) -> Step:
         q0 = op.solve_A0(F)
         rhs = -op.apply_dA_support(q0[:, cols], rows, cols)
         Z0 = None if x0 is None else -op.apply_dA_support(x0[:, cols], rows, cols)
+        Z0 = _better_than_zero(reduced, rhs, Z0, op.norm)
         Z, info, history = _real_gmres(reduced, rhs, weights, opts, op.rhs_norm, 200, Z0)
         Y = F.copy()
         Y[:, rows] += Z
@@ -122,6 +136,7 @@ def _full_step(op: HarmonicBalance, opts: Options) -> Step:
 
     def step(F: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, list[float]]:
         Y0 = None if x0 is None else op.apply_A0(x0)
+        Y0 = _better_than_zero(preconditioned, F, Y0, op.norm)
         Y, info, history = _real_gmres(preconditioned, F, weights, opts, op.rhs_norm, 60, Y0)
         return op.solve_A0(Y), info, history
 
