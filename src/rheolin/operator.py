@@ -134,9 +134,9 @@ class HarmonicBalance:
         self.backend = backend
         self.backend_note = ""
         self._inverse: BlockInverse | None = None
-        self.pencil = Pencil(system.K.get(0), system.D.get(0), system.M.get(0), self.w1)
         self._support_maps: tuple[Any, sp.csr_array, sp.csr_array] | None = None
         self._blocks = {k: self._block(k) for k in [0, *system.coefficient_harmonics]}
+        self.pencil = self._pencil()
         self._coupling = self._coupling_maps()
         self.rhs = np.zeros((self.pos.size, self.n_dof), dtype=complex)
         for i, n in enumerate(self.pos):
@@ -154,6 +154,15 @@ class HarmonicBalance:
 
         s = self.system
         return _Block(get(s.M), get(s.D), get(s.K), self.n_dof, self.sparse)
+
+    def _pencil(self) -> Pencil:
+        """``A0(n)`` on the union pattern of ``K_0, D_0, M_0`` (built once from block 0)."""
+        s = self.system
+        if not self.sparse:
+            return Pencil(s.K.get(0), s.D.get(0), s.M.get(0), self.w1)
+        rows, cols, values = self._blocks[0].entries()  # CSC order
+        indptr = np.searchsorted(cols, np.arange(self.n_dof + 1))
+        return Pencil.from_csc(indptr, rows, values.real, self.w1)  # X_0 is real
 
     def _coupling_maps(self) -> list[tuple[_Block, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
         """For each ``k != 0``: rows ``m >= 0`` and columns ``n = m - k in H``."""

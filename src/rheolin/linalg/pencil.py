@@ -56,6 +56,25 @@ class Pencil:
                 z if x is None else np.asarray(x, dtype=float) for x in (K, D, M)
             )
 
+    @classmethod
+    def from_csc(
+        cls, indptr: np.ndarray, indices: np.ndarray, values: np.ndarray, w1: float
+    ) -> Pencil:
+        """From a CSC pattern and its values (rows ``K, D, M``) already summed by the caller.
+
+        >>> KDM = np.array([[4.0], [0.0], [1.0]])  # K = 4, D = 0, M = 1 on one entry
+        >>> p = Pencil.from_csc(np.array([0, 1]), np.array([0]), KDM, 1.0)
+        >>> p.matrix(2).toarray()
+        array([[0.+0.j]])
+        """
+        self = cls.__new__(cls)
+        self.sparse, self.n, self.w1 = True, int(indptr.size - 1), float(w1)
+        self.indptr = np.asarray(indptr, dtype=np.int64)
+        self.indices = np.asarray(indices, dtype=np.int64)
+        self.values = np.asarray(values, dtype=float)
+        self._dense, self._csc = None, None
+        return self
+
     def s(self, ns: np.ndarray) -> np.ndarray:
         """``s = i n w1`` per harmonic."""
         return 1j * self.w1 * np.asarray(ns, dtype=float)

@@ -19,8 +19,9 @@ from ..mechanics.template import SpeedTemplate
 
 __all__ = ["SpeedResponse", "lti_speeds"]
 
-#: Memory for one batch of dense systems (speeds x harmonics x n^2 complex numbers).
-BATCH_BYTES = 64 * 2**20
+#: Memory for one batch of dense systems (speeds x harmonics x n^2 complex numbers): small
+#: batches stay in cache and keep the peak memory low.
+BATCH_BYTES = 4 * 2**20
 
 
 @dataclass
@@ -89,26 +90,27 @@ def lti_speeds(
         raise ValueError("`harmonics` must be integers >= 0 (and the model must be loaded)")
     w1 = float(template.plan.base) * speeds
     n = template.n_dof
+    # A(w1, s) = sum_j c_j(w1, s) B_j over the nonzero X^(p) (X = K, D, M; weights 1, s, s^2)
+    basis, powers = [], []
+    for name, order in (("K", 0), ("D", 1), ("M", 2)):
+        for p in range(3):
+            if np.any(poly[name][p]):
+                basis.append(poly[name][p].ravel())
+                powers.append((order, p))
+    B = np.array(basis, dtype=complex)  # (J, n^2)
     q = np.zeros((speeds.size, ns.size, n), dtype=complex)
     residual = np.zeros(speeds.size)
+    weight = np.where(ns == 0, 1.0, 2.0)
     step = max(1, BATCH_BYTES // (16 * n * n * ns.size))
     for start in range(0, speeds.size, step):
         w = w1[start : start + step]
-        X = {
-            name: P[0][None] + w[:, None, None] * P[1][None] + (w * w)[:, None, None] * P[2][None]
-            for name, P in poly.items()
-        }
-        s = 1j * w[:, None] * ns[None, :]  # (speeds, harmonics)
-        A = (
-            X["K"][:, None]
-            + s[..., None, None] * X["D"][:, None]
-            + (s * s)[..., None, None] * X["M"][:, None]
-        )
+        sv = 1j * w[:, None] * ns[None, :]  # (speeds, harmonics)
+        C = np.stack([sv**ws * (w**p)[:, None] for ws, p in powers], axis=-1)
+        A = (C.reshape(-1, len(powers)) @ B).reshape(w.size, ns.size, n, n)
         F = np.stack([_load(f_poly, loads, w, int(k), n) for k in ns], axis=1)
         with np.errstate(all="ignore"):
             Q = np.linalg.solve(A, F[..., None])[..., 0]
             R = F - (A @ Q[..., None])[..., 0]
-        weight = np.where(ns == 0, 1.0, 2.0)
         rn = np.sqrt(np.sum(weight * np.sum(np.abs(R) ** 2, axis=2), axis=1))
         fn = np.sqrt(np.sum(weight * np.sum(np.abs(F) ** 2, axis=2), axis=1))
         q[start : start + step] = Q
