@@ -82,6 +82,19 @@ def _gearbox(out: str) -> dict:
     return dict(rows=rows, setup=setup, peak_mb=(status_kb("VmHWM") - base) / 1024)
 
 
+def _sweep() -> dict:
+    """``rheolin.results.sweep_speeds`` (what ``rheolin sweep`` runs per speed)."""
+    from rheolin.data import example_path
+    from rheolin.io import load_model
+    from rheolin.results.sweep import sweep_speeds
+
+    model = load_model(example_path("gearbox"))
+    t = time.perf_counter()
+    ds = sweep_speeds(model, np.array(RPMS) * np.pi / 30, order=3, max_order=200)
+    assert ds["success"].values.all()
+    return dict(per_speed=(time.perf_counter() - t) / len(RPMS))
+
+
 def _ross_rotor() -> tuple:
     """ROSS's ``rotor_example`` (ross/rotor_assembly.py) and the same rotor in rheolin."""
     from rheolin.mechanics import Model
@@ -159,16 +172,18 @@ def _rss(n_solves: int) -> dict:
     for i in range(n_solves):
         sol = rl.solve(system, H, method="gmres", stability=False)
         assert sol.success
-        if i + 1 in (10, n_solves):
+        if i + 1 in (10, 100, n_solves):
             marks[i + 1] = status_kb("VmRSS") / 1024
-    return dict(growth_mb=marks[n_solves] - marks[10], rss_mb=marks[n_solves],
-                seconds=time.perf_counter() - t)  # fmt: skip
+    return dict(growth_mb=marks[n_solves] - marks[10], late_mb=marks[n_solves] - marks[100],
+                rss_mb=marks[n_solves], seconds=time.perf_counter() - t)  # fmt: skip
 
 
 def worker(args: list[str]) -> None:
     task, out = args[0], args[1]
     if task == "gearbox":
         result = _gearbox(out)
+    elif task == "sweep":
+        result = _sweep()
     elif task in ("ross", "batched", "loop"):
         result = _ross(task, int(args[2]), out)
     else:
@@ -258,6 +273,15 @@ def main() -> None:
         "",
     ]
     assert agree < 1e-9, agree
+    sweep = {
+        name: run("sweep", src)[0]["per_speed"] for name, src in (("before", old), ("after", new))
+    }
+    lines += [
+        f"`rheolin.results.sweep_speeds` (what `rheolin sweep` runs), same speeds: "
+        f"{sweep['before']:.2f} s -> {sweep['after']:.2f} s per speed "
+        f"({sweep['before'] / sweep['after']:.1f}x).",
+        "",
+    ]
     n = args.ross_speeds
     lines += [
         f"## (b) ROSS `rotor_example` (42 DOF), unbalance response at {n} speeds",
@@ -299,13 +323,14 @@ def main() -> None:
             f"## (c) Resident memory over {args.rss_solves} `rl.solve` calls (1000-DOF chain, "
             "51 harmonics, gmres, default workers)",
             "",
-            "| | RSS growth 10 -> N solves [MB] | RSS at the end [MB] | seconds |",
-            "|---|---|---|---|",
+            "| | RSS growth 10 -> N solves [MB] | 100 -> N [MB] | RSS at the end [MB] | seconds |",
+            "|---|---|---|---|---|",
         ]
         for name, src in (("before", old), ("after", new)):
             r, _ = run("rss", src, str(args.rss_solves))
             lines.append(
-                f"| {name} | {r['growth_mb']:.0f} | {r['rss_mb']:.0f} | {r['seconds']:.1f} |"
+                f"| {name} | {r['growth_mb']:.0f} | {r['late_mb']:.0f} | {r['rss_mb']:.0f} | "
+                f"{r['seconds']:.1f} |"
             )
             print(lines[-1], flush=True)
     text = "\n".join(lines) + "\n"

@@ -21,7 +21,7 @@ __all__ = ["SpeedResponse", "lti_speeds"]
 
 #: Memory for one batch of dense systems (speeds x harmonics x n^2 complex numbers): small
 #: batches stay in cache and keep the peak memory low.
-BATCH_BYTES = 4 * 2**20
+BATCH_BYTES = 2**20
 
 
 @dataclass
