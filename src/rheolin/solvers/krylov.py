@@ -158,7 +158,7 @@ def solve_gmres(op: HarmonicBalance, opts: Options) -> SolverOutcome:
     Q, info, history = step(op.rhs, opts.x0)
     refinements = 0
     while info == 0 and not op.inverse.exact and refinements < MAX_REFINEMENTS:
-        R = op.rhs - op.apply(Q)
+        R = op.residual(Q)
         if op.norm(R) <= opts.rtol * op.rhs_norm:
             break
         dQ, info, more = step(R, None)

@@ -60,7 +60,9 @@ def solve(
     callback
         Called as ``callback(iteration, relative_residual)`` by iterative methods.
     workers
-        Threads for the per-harmonic factorizations and solves (default: the cores).
+        Threads for the per-harmonic SuperLU factorizations and solves, from one long-lived
+        pool (default 1: SuperLU holds the GIL, so threads rarely pay; see
+        :mod:`rheolin.linalg.pool`).
     stability
         Check Floquet stability (Hill's method) of the operating point. ``None`` (default)
         checks when the dense Hill problem is small enough (``2 n |H_F| <=``
