@@ -24,8 +24,8 @@ import scipy.io
 import scipy.sparse as sp
 
 from ..errors import ModelError
-from ._term import Term
-from .rotation import add_series, circulatory_matrix, clean_series, rotate_body_matrix, unit_axis
+from ._term import SpeedTerm, Term
+from .rotation import circulatory_matrix, clean_series, rotate_body_matrix, unit_axis
 
 __all__ = ["CondensedBody", "load_condensed", "load_matrix"]
 
@@ -120,20 +120,24 @@ class CondensedBody:
 
     def term(self, axis: object, s: int, w1: float) -> Term:
         """:class:`Term` of the body spinning at ``W = s * w1`` about ``axis``."""
+        t = self.speed_term(axis, s).at(w1)
+        return Term(dofs=t.dofs, M=t.M, D=clean_series(t.D) if t.D else {}, K=clean_series(t.K))
+
+    def speed_term(self, axis: object, s: int) -> SpeedTerm:
+        """:meth:`term` as a polynomial in ``w1``: the circulatory stiffness ``Rt D_B Rt'^T``
+        and the gyroscopic damping ``W G`` are its linear part."""
         e = unit_axis(axis)
-        W = s * float(w1)
         M = rotate_body_matrix(self._global(self.M), e, s)
-        K = rotate_body_matrix(self._global(self.K), e, s)
-        D: dict[int, np.ndarray] = {}
+        K = {0: rotate_body_matrix(self._global(self.K), e, s)}
+        D: dict[int, dict[int, np.ndarray]] = {}
         if self.D is not None:
             Dg = self._global(self.D)
-            D = rotate_body_matrix(Dg, e, s)
-            K = add_series(K, circulatory_matrix(Dg, e, s, w1))
-        if self.G is not None and W != 0.0:
-            D = add_series(
-                D, {k: W * v for k, v in rotate_body_matrix(self._global(self.G), e, s).items()}
-            )
-        return Term(dofs=self.dofs, M=M, D=clean_series(D) if D else {}, K=clean_series(K))
+            D[0] = rotate_body_matrix(Dg, e, s)
+            K[1] = circulatory_matrix(Dg, e, s, 1.0)
+        if self.G is not None and s != 0:
+            G = rotate_body_matrix(self._global(self.G), e, s)
+            D[1] = {k: s * v for k, v in G.items()}
+        return SpeedTerm(dofs=self.dofs, M={0: M}, D=D, K=K)
 
 
 def load_condensed(

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ModelError
-from .assembly import Assembled, assemble_model, model_speed_plan
+from .assembly import Assembled
 from .condensed import CondensedBody, load_condensed
 from .gears import rectangular_wave_coefficients
 from .joints import expand_matrix
@@ -38,6 +38,7 @@ from .rigid import couple_unbalance as _add_couple
 from .rotation import unit_axis
 from .sections import Material, Section, hollow_circular, solid_circular
 from .speeds import GearPair, SpeedPlan
+from .template import SpeedTemplate, assemble_model, model_speed_plan
 
 __all__ = ["Assembled", "Model"]
 
@@ -403,6 +404,12 @@ class Model:
     def assemble(self, speed: float) -> Assembled:
         """Assemble at input speed ``speed`` [rad/s] (> 0); see :class:`Assembled`."""
         return assemble_model(self, _positive(speed, "speed"))
+
+    def speed_template(self) -> SpeedTemplate:
+        """The model assembled once for many speeds (:class:`SpeedTemplate`): its
+        ``assemble(speed)`` only scales the speed-dependent coefficients. Make a new one after
+        changing the model."""
+        return SpeedTemplate(self)
 
     def _body(self, name: str, field_name: str) -> _Body:
         if name not in self.bodies:

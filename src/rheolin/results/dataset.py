@@ -21,7 +21,7 @@ from .. import __version__
 from ..io.atomic import atomic_write
 from ..mechanics.assembly import Assembled
 from ..mechanics.joints import COMPONENTS
-from ..mechanics.outputs import bearing_forces, transmission_errors
+from ..mechanics.outputs import bearing_force_array, transmission_error_array
 from .compute import OperatingPoint
 
 __all__ = [
@@ -99,7 +99,7 @@ def point_dataset(
     }
     names = list(a.joints)
     if names:
-        F = np.array([[r.value for r in bearing_forces(sol, a, j)] for j in names])
+        F = np.array([bearing_force_array(sol, a, j)[1] for j in names])
         coords["bearing"] = ("bearing", names)
         data["bearing_force"] = (
             ("bearing", "harmonic", "force_component", "part"),
@@ -108,7 +108,7 @@ def point_dataset(
         )
     meshes = list(a.meshes)
     if meshes:
-        E = np.array([[r.value[0] for r in transmission_errors(sol, a, m)] for m in meshes])
+        E = np.array([transmission_error_array(sol, a, m)[1] for m in meshes])
         coords["mesh"] = ("mesh", meshes)
         data["dte"] = (
             ("mesh", "harmonic", "part"),
