@@ -203,7 +203,15 @@ class FloquetResult:
         if np.isfinite(target):
             spread = self.info.get("uncertainty", reach)
             slack = float(np.sum(spread) + np.sum(tol)) + unc + 1e-10 * float(np.sum(np.abs(lam)))
-            if abs(float(np.sum(lam.real)) - target) > slack:
+            total = float(np.sum(lam.real))
+            # modes certified by their Gershgorin discs were not computed: each pair counts
+            # with its time-averaged real part, within its radius
+            skipped = self.info.get("certified_modes", np.zeros(0, complex))
+            radii = self.info.get("certified_radii", np.zeros(0))
+            pair = np.where(np.abs(skipped.imag) > 0, 2.0, 1.0)
+            total += float(np.sum(pair * skipped.real))
+            slack += float(np.sum(pair * radii))
+            if abs(total - target) > slack:
                 return False
         if not self.stable:
             sure = (lam.real > tol + reach) & ~self.info.get("unresolved", np.zeros(lam.size, bool))
@@ -322,9 +330,12 @@ def floquet(
         if system.time_invariant:
             hset = HarmonicSet([0])
         else:
-            hset = dense_stability_harmonics(system)
-            if method == "auto" and 2 * system.n * len(hset) > AUTO_DENSE_LIMIT:
+            if (
+                method == "auto"
+                and 2 * system.n * (2 * _dense_order(system) + 1) > AUTO_DENSE_LIMIT
+            ):
                 return _lattice_auto(system, order, budget, refine=order is None)
+            hset = dense_stability_harmonics(system)
     else:
         hset = as_harmonic_set(harmonics)
     _require_grid(hset)
@@ -346,11 +357,15 @@ def floquet(
         return _floquet_sparse(system, hset, frequencies, int(k), int(max_shifts))
 
 
+def _dense_order(system: PeriodicSystem) -> int:
+    kmax = max((abs(k) for k in system.coefficient_harmonics), default=0)
+    return 2 * kmax + 4 if kmax else 0
+
+
 def dense_stability_harmonics(system: PeriodicSystem) -> HarmonicSet:
     """Dense Hill truncation ``-N..N`` with ``N`` twice the widest coefficient harmonic + 4
     (``{0}`` for a time-invariant system)."""
-    kmax = max((abs(k) for k in system.coefficient_harmonics), default=0)
-    return HarmonicSet.full(2 * kmax + 4 if kmax else 0)
+    return HarmonicSet.full(_dense_order(system))
 
 
 def _require_grid(hset: HarmonicSet) -> None:
@@ -391,8 +406,7 @@ def floquet_memory(system: PeriodicSystem, order: int | None = None) -> tuple[st
         if size <= AUTO_DENSE_LIMIT:
             return "dense", size * size * 16 * 7
         return "sparse", int(system.n * 16 * 400 + 200 * 2**20)
-    hset = dense_stability_harmonics(system)
-    size = 2 * system.n * len(hset)
+    size = 2 * system.n * (2 * _dense_order(system) + 1)
     if size <= AUTO_DENSE_LIMIT:
         return "dense", size * size * 16 * 7
     p = DEFAULT_LATTICE_ORDER if order is None else int(order)
@@ -470,6 +484,8 @@ def _floquet_lattice(
     res.info["split_gap"] = out.split_gap[order]
     res.info["unresolved"] = out.unresolved[order]
     res.info["certified"] = out.certified[order]
+    for key in ("certified_modes", "certified_radii"):
+        res.info[key] = out.info.get(key)
     if "confirmed" in out.info:
         res.info["confirmed"] = out.info["confirmed"]
     res.info["liouville"] = out.liouville
