@@ -451,8 +451,11 @@ def _lattice_auto(
 def _floquet_lattice(
     system: PeriodicSystem, lattice: Lattice, *, budget: Any, near: Any = None
 ) -> FloquetResult:
+    import time
+
     from .floquet_lattice import confirm_unresolved, lattice_exponents, lattice_memory
 
+    t0 = time.perf_counter()
     est = lattice_memory(system, lattice)
     _check_budget(
         est,
@@ -463,10 +466,18 @@ def _floquet_lattice(
     )
     with np.errstate(under="ignore"), _single_thread_blas():
         out = lattice_exponents(system, lattice, near=near)
-        if near is None and np.any(out.unresolved & ~out.certified):
-            finer = _finer(system, lattice)
-            if finer is not None and lattice_memory(system, finer) <= resolve_budget(budget):
-                out = confirm_unresolved(system, out, finer)
+        # unresolved exponents: search their clusters again on finer lattices (p + 1, p + 2),
+        # only near them, as long as the memory budget allows
+        finer: Lattice | None = lattice
+        steps: list[Any] = []
+        while near is None and np.any(out.unresolved & ~out.certified) and len(steps) < 2:
+            finer = _finer(system, finer) if finer is not None else None
+            if finer is None or lattice_memory(system, finer) > resolve_budget(budget):
+                break
+            out = confirm_unresolved(system, out, finer)
+            steps.append(out.info.pop("confirmed"))
+        if steps:
+            out.info["confirmed"] = steps
     w = system.omega
     res = _result(out.exponents, out.bounds, out.edge, w, "lattice", info=out.info)
     order = np.argsort(-out.exponents.real, kind="stable")
@@ -480,6 +491,7 @@ def _floquet_lattice(
     res.averaged = out.averaged
     res.averaged_tol = out.averaged_tol
     res.info["memory_estimate"] = est
+    res.info["seconds"] = time.perf_counter() - t0
     res.info["centroid"] = out.centroid[order]
     res.info["split_gap"] = out.split_gap[order]
     res.info["unresolved"] = out.unresolved[order]

@@ -123,6 +123,8 @@ class LatticeExponents:
     uncertainty: np.ndarray
     liouville: tuple[float, float]
     info: dict[str, Any] = field(default_factory=dict)
+    related: list[list[complex]] = field(default_factory=list)
+    radius: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def complete(self) -> bool:
@@ -326,7 +328,6 @@ def lattice_exponents(
             satisfied[0] = _count(_select(mine, {cid: need}, w, nh)) >= need
             return satisfied[0]
 
-
         satisfied = [False]
         _arnoldi(apply, v0, accept, steps=ARNOLDI_STEPS, tol=ARNOLDI_TOL)
         arnoldi_seconds += time.perf_counter() - t2
@@ -372,6 +373,8 @@ def lattice_exponents(
     certified: list[bool] = []
     centres: list[complex] = []
     spread: list[float] = []
+    related: list[list[complex]] = []
+    radii: list[float] = []
     conj_index = _conjugate_index(lam0)
     outer = _Outer(hill, avg) if nh > 0 else None
     radius: dict[int, float] = {}
@@ -411,6 +414,10 @@ def lattice_exponents(
             members = clusters[c.home] if c.home >= 0 else np.zeros(0, int)
             mid = complex(np.mean(lam0[members])) if members.size else complex("nan")
             centres.append(mid if lam_i == c.lam else complex(np.conj(mid)))
+            related.append(
+                [complex(np.mean(lam0[clusters[f]])) for f in c.families if f < len(clusters)]
+            )
+            radii.append(float(discs[members].max()) if members.size else np.inf)
     info = {
         "lattice_size": nh,
         "lattice_order": lattice.order,
@@ -440,6 +447,8 @@ def lattice_exponents(
         certified=np.array(certified, dtype=bool),
         centre=np.array(centres, dtype=complex),
         order=np.full(len(lams), lattice.order, dtype=int),
+        related=related,
+        radius=np.array(radii, dtype=float),
         uncertainty=np.array(spread, dtype=float),
         unresolved=np.array(
             [c.forced or c.edge > UNRESOLVED_EDGE for c, cj in reps for _ in range(2 if cj else 1)],
@@ -511,7 +520,7 @@ def confirm_unresolved(
     fine = lattice_exponents(system, finer, near=centres)
     fields = (
         "exponents", "bounds", "truncation", "edge", "centroid", "dominant", "certified",
-        "centre", "unresolved", "order", "uncertainty",
+        "centre", "unresolved", "order", "uncertainty", "radius",
     )  # fmt: skip
     keep = np.ones(out.exponents.size, dtype=bool)
     take = np.zeros(fine.exponents.size, dtype=bool)
@@ -530,33 +539,49 @@ def confirm_unresolved(
         take |= there_all
         replaced = int(centres.size)
         centres = centres[:0]
+    left: list[complex] = []
     for z in centres:
-        tol = CLUSTER_TOL * max(abs(z), system.omega)
-        mine = (np.abs(out.centre - z) <= tol) | (np.abs(out.centre - np.conj(z)) <= tol)
-        there = (np.abs(fine.centre - z) <= tol) | (np.abs(fine.centre - np.conj(z)) <= tol)
+        mine, there = members(out.centre, z), members(fine.centre, z)
         if not there.any():
+            left.append(z)
             continue
         if not fine.unresolved[there].any() and there.sum() == mine.sum():
             keep &= ~mine
             take |= there
             replaced += 1
-            continue
-        if there.sum() != mine.sum():
-            continue  # the finer search did not account for the same exponents
-        # unresolved at both orders: confirmed only when every exponent of the cluster stays
-        # put (real and imaginary part) to a tenth of its distance from the axis
-        coarse, finer_l = out.exponents[mine], fine.exponents[there]
-        moved = max(float(np.min(np.abs(finer_l - z0))) for z0 in coarse)
-        worst = float(max(coarse.real.max(), finer_l.real.max()))
-        if worst < 0 and TRUNCATION_SAFETY * moved < -worst:
+        elif _agree(out.exponents[mine], fine.exponents[there], fine.unresolved[there]):
+            _certify(out, mine, out.exponents[mine], fine.exponents[there])
+            confirmed += 1
+        else:
+            left.append(z)
+    if left:
+        # mixed neighbours trade exponents between orders: judge what is left as one group,
+        # by its largest real part, which must stay put and keep a margin of a tenth of the
+        # group's coupling radius (so that agreement by chance, both truncations sitting at
+        # the undisturbed damping of a strongly coupled mode, does not count)
+        mine = np.any([members(out.centre, z) for z in left], axis=0)
+        there = np.any([members(fine.centre, z) for z in left], axis=0)
+        radius = max(float(np.max(out.radius[mine], initial=0.0)), 0.0)
+        a = float(out.exponents.real[mine].max()) if mine.any() else 0.0
+        b = float(fine.exponents.real[there].max()) if there.any() else 0.0
+        if (
+            there.any()
+            and a < 0
+            and b < 0
+            and TRUNCATION_SAFETY * abs(a - b) < -max(a, b)
+            and -max(a, b) > 0.1 * radius
+        ):
             hit = mine & out.unresolved
             out.certified[hit] = True
-            out.uncertainty[hit] = np.maximum(out.uncertainty[hit], TRUNCATION_SAFETY * moved)
-            confirmed += 1
+            out.uncertainty[hit] = np.maximum(out.uncertainty[hit], TRUNCATION_SAFETY * abs(a - b))
+            confirmed += len(left)
     for name in fields:
         setattr(out, name, np.concatenate([getattr(out, name)[keep], getattr(fine, name)[take]]))
     out.partner = [p for p, k in zip(out.partner, keep, strict=True) if k] + [
         p for p, t in zip(fine.partner, take, strict=True) if t
+    ]
+    out.related = [r for r, k in zip(out.related, keep, strict=True) if k] + [
+        r for r, t in zip(fine.related, take, strict=True) if t
     ]
     out.split_gap = _split_gaps(out.exponents, finer.indices, system.omega)
     out.info["confirmed"] = {
@@ -566,6 +591,24 @@ def confirm_unresolved(
         "confirmed": confirmed,
     }
     return out
+
+
+def _agree(coarse: np.ndarray, fine: np.ndarray, fine_unresolved: np.ndarray) -> bool:
+    """Two truncations agree on a cluster: as many exponents, each within a tenth of its
+    distance from the axis of one of the other order, all of them stable."""
+    if coarse.size == 0 or coarse.size != fine.size:
+        return False
+    moved = max(float(np.min(np.abs(fine - z0))) for z0 in coarse)
+    worst = float(max(coarse.real.max(), fine.real.max()))
+    del fine_unresolved  # agreement is the test, resolved or not
+    return worst < 0 and TRUNCATION_SAFETY * moved < -worst
+
+
+def _certify(out: LatticeExponents, mine: np.ndarray, coarse: np.ndarray, fine: np.ndarray) -> None:
+    moved = max(float(np.min(np.abs(fine - z0))) for z0 in coarse)
+    hit = mine & out.unresolved
+    out.certified[hit] = True
+    out.uncertainty[hit] = np.maximum(out.uncertainty[hit], TRUNCATION_SAFETY * moved)
 
 
 def _gershgorin(system: PeriodicSystem, avg: _Averaged, modes: list[int]) -> list[float]:

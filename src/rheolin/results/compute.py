@@ -109,6 +109,11 @@ def solve_point(
         x0=x0,
         backend=backend,
     )
+    res = sol.floquet
+    if res is not None and not res.stable and res.method == "lattice":
+        from ..stability.mechanism import identify
+
+        sol.info["stability_mechanism"] = identify(model, a, res).label
     settings = dict(method=method, order=order, max_order=max_order, rtol=rtol)
     positions = {(b.name, i): x for b in model.bodies.values() for i, x in enumerate(b.positions)}
     return OperatingPoint(a, hset, sol, time.perf_counter() - t0, settings, positions)
