@@ -265,7 +265,7 @@ def test_memory_budget_refuses_or_coarsens_before_allocating(monkeypatch) -> Non
     s = chain(w1, 0.3, 0.3)
     with pytest.raises(MemoryBudgetError, match="budget"):
         rl.floquet(s, method="lattice", order=4, memory_budget="1 MB")
-    from rheolin.floquet_lattice import lattice_memory
+    from rheolin.floquet import lattice_memory
 
     small, large = (lattice_memory(s, system_lattice(s, p)) for p in (1, 2))
     assert small < large
