@@ -24,7 +24,7 @@ class LatticeExponents:
     edge: np.ndarray
     centroid: np.ndarray
     dominant: np.ndarray
-    partner: list[tuple[int, int]]
+    partner: list[tuple[int, int, int]]
     expected: int
     averaged: np.ndarray
     averaged_tol: np.ndarray

@@ -105,9 +105,10 @@ class FloquetResult:
         Lattice method: for each exponent, the index of the time-averaged mode (in
         ``averaged``) that carries most of its eigenvector at harmonic 0.
     partner
-        Lattice method: for each exponent, the harmonic ``h`` other than 0 that carries most
-        of its eigenvector's energy (what it resonates with) and the time-averaged mode that
-        dominates the eigenvector there (an index into ``averaged``).
+        Lattice method: for each exponent, what it resonates with: ``(shift, mode_a,
+        mode_b)``, the time-averaged modes (indices into ``averaged``) dominating its
+        eigenvector at two harmonics ``shift`` apart (a mode and its own conjugate for a
+        parametric resonance, ``2 w_a ~ |shift| w1``).
     averaged
         Lattice method: the exponents of the time-averaged system.
     averaged_tol
@@ -137,7 +138,7 @@ class FloquetResult:
     complete: bool = True
     lattice: Lattice | None = None
     dominant: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
-    partner: list[tuple[int, int]] = field(default_factory=list)
+    partner: list[tuple[int, int, int]] = field(default_factory=list)
     averaged: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=complex))
     averaged_tol: np.ndarray = field(default_factory=lambda: np.zeros(0))
 

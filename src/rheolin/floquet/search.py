@@ -250,7 +250,7 @@ def lattice_exponents(
         nx, ny = np.linalg.norm(xb), np.linalg.norm(yb)
         bound = _EPS * (normA + abs(lam_c) * normB) * nx * ny / max(denom, np.finfo(float).tiny)
         tau = outer.estimate(lam_c, xq, u) if outer is not None else 0.0
-        part = _partner(c, H, n, avg.WB)
+        part = _partner(c, H, n, avg.WB, conj_index)
         for lam_i in [c.lam, np.conj(c.lam)] if conj_too else [c.lam]:
             lams.append(complex(lam_i))
             bounds.append(bound)
@@ -258,7 +258,11 @@ def lattice_exponents(
             edges.append(c.edge)
             cents.append(c.centroid)
             doms.append(c.dominant if lam_i == c.lam else conj_index[c.dominant])
-            partners.append(part if lam_i == c.lam else (-part[0], conj_index[part[1]]))
+            partners.append(
+                part
+                if lam_i == c.lam
+                else (-part[0], int(conj_index[part[1]]), int(conj_index[part[2]]))
+            )
             certified.append(ok if unresolved else False)
             spread.append(max(TRUNCATION_SAFETY * tau, disc))
             members = clusters[c.home] if c.home >= 0 else np.zeros(0, int)
@@ -396,17 +400,40 @@ def _polish(
     return complex(lam), q1, u, np.asarray(P.conj().T @ u)
 
 
-def _partner(c: _Candidate, H: np.ndarray, n: int, WB: np.ndarray) -> tuple[int, int]:
-    """The most energetic harmonic other than 0 of a representative, and the time-averaged
-    mode that dominates the eigenvector there (``(0, -1)`` without one)."""
+def _partner(
+    c: _Candidate, H: np.ndarray, n: int, WB: np.ndarray, conj: np.ndarray
+) -> tuple[int, int, int]:
+    """What a representative resonates with: ``(shift, mode_a, mode_b)``, the time-averaged
+    mode ``mode_a`` dominating the eigenvector at one harmonic and ``mode_b`` at another
+    ``shift`` harmonics away (``(0, -1, -1)`` without one).
+
+    Among the harmonics holding at least 1 % of the largest energy, a parametric resonance
+    pairs a mode with its own conjugate (``2 w_j ~ shift w1``): the most energetic such pair
+    is taken. Otherwise (a combination of two modes) the two most energetic harmonics are.
+    The harmonics in between (the non-resonant steps of a secondary resonance, or a
+    representative whose energy sits off harmonic 0) are passed over.
+    """
     nh = H.size
-    for i in np.argsort(-c.energy, kind="stable"):
-        if H[i] != 0:
-            yh = np.concatenate(
-                [c.y[i * n : (i + 1) * n], c.y[n * nh + i * n : n * nh + (i + 1) * n]]
-            )
-            return int(H[i]), int(np.argmax(np.abs(WB @ yh)))
-    return 0, -1
+    order = [int(i) for i in np.argsort(-c.energy, kind="stable")]
+    top = c.energy[order[0]]
+    big = [i for i in order if c.energy[i] >= 1e-2 * top]
+    if len(big) < 2:
+        return 0, -1, -1
+
+    def mode_at(i: int) -> int:
+        yh = np.concatenate([c.y[i * n : (i + 1) * n], c.y[n * nh + i * n : n * nh + (i + 1) * n]])
+        return int(np.argmax(np.abs(WB @ yh)))
+
+    modes = {i: mode_at(i) for i in big}
+    best: tuple[float, int, int] | None = None
+    for a in big:
+        for b in big:
+            if b != a and conj[modes[a]] == modes[b] and H[b] != H[a]:
+                score = float(c.energy[a] + c.energy[b])
+                if best is None or score > best[0]:
+                    best = (score, a, b)
+    a, b = (best[1], best[2]) if best is not None else (big[0], big[1])
+    return int(H[b] - H[a]), modes[a], modes[b]
 
 
 def _conjugate_index(lam: np.ndarray) -> np.ndarray:

@@ -182,7 +182,7 @@ def classify(
     if lam0.size and bool(np.any(lam0.real > atol)):
         cat = ROTATING_DAMPING if rotating_damping else CIRCULATORY
         return Mechanism(cat, "time-invariant", (), "", lead)
-    h, mode_h = result.partner[0] if result.partner else (0, -1)
+    h, mode_a, mode_h = result.partner[0] if result.partner else (0, -1, -1)
     table = generators
     coef = _decompose(h, table)
     if coef is None:
@@ -197,7 +197,7 @@ def classify(
         resonance = "combination"
     exc = combination_text(coef[used] * int(np.sign(h)), [table[i][0] for i in used])
     freq = abs(h) * w
-    j = int(result.dominant[0]) if result.dominant.size else -1
+    j = int(mode_a)
     wj = abs(lam0[j].imag) if j >= 0 else abs(lead.imag)
     if mode_h >= 0 and j >= 0 and np.isclose(lam0[mode_h], np.conj(lam0[j]), rtol=1e-9):
         modes = f"2 x {wj:.5g} rad/s"
