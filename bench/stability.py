@@ -12,7 +12,8 @@ Every measurement runs in its own subprocess (peak RSS from ``/proc``, see ``_me
 
 Usage::
 
-    OPENBLAS_NUM_THREADS=1 python bench/stability.py [--speeds 50] [--out bench/results/stability.md]
+    OPENBLAS_NUM_THREADS=1 python bench/stability.py [--speeds 50] \
+        [--out bench/results/stability.md]
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ HERE = Path(__file__).resolve().parent
 RPM = np.pi / 30
 
 
-def _model():  # noqa: ANN202
+def _model():
     from rheolin.data import example_path
     from rheolin.io import load_model
 
