@@ -18,8 +18,11 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from .budget import format_bytes, solve_budget
 from .harmonics import HarmonicSet
 from .linalg import BlockInverse, Pencil, SingularBlockError, default_workers, make_inverse
+from .linalg.memory import SolveMemory
+from .linalg.memory import check as check_memory
 from .system import PeriodicSystem
 
 __all__ = ["HarmonicBalance", "SingularBlockError", "default_workers"]
@@ -112,6 +115,14 @@ class HarmonicBalance:
     backend
         Inverse of ``A0(n)``: ``"auto"``, ``"lu"``, ``"dense"`` or ``"modal"``
         (:mod:`rheolin.linalg`).
+    sparse_backend
+        Sparse direct solver of ``lu``: ``"auto"``, ``"pardiso"``, ``"umfpack"`` or
+        ``"superlu"`` (:mod:`rheolin.linalg.direct`).
+    memory_budget
+        Bytes (or ``"8 GB"``) the solve may use; default :func:`rheolin.budget.solve_budget`.
+        The estimate (:attr:`memory`) is checked before the load vector is allocated
+        (:class:`~rheolin.budget.MemoryBudgetError`), and the factors are held only while
+        they fit.
     """
 
     def __init__(
@@ -121,6 +132,8 @@ class HarmonicBalance:
         *,
         workers: int | None = None,
         backend: str = "auto",
+        sparse_backend: str = "auto",
+        memory_budget: str | int | None = None,
     ) -> None:
         self.system = system
         self.harmonics = harmonics
@@ -139,6 +152,10 @@ class HarmonicBalance:
         self._blocks = {k: self._block(k) for k in [0, *system.coefficient_harmonics]}
         self.pencil = self._pencil()
         self._coupling = self._coupling_maps()
+        self.sparse_backend = sparse_backend
+        self.budget = solve_budget(memory_budget)
+        self.memory = SolveMemory(self.n_dof, int(self.pos.size), int(self.support[0].size))
+        check_memory(self.memory, self.budget)
         self.rhs = np.zeros((self.pos.size, self.n_dof), dtype=complex)
         for i, n in enumerate(self.pos):
             if int(n) in system.f:
@@ -319,9 +336,27 @@ class HarmonicBalance:
     def inverse(self) -> BlockInverse:
         """``A0(n)^-1`` for every ``n >= 0`` (made on first use by :attr:`backend`)."""
         if self._inverse is None:
+            spare = self.budget - self.memory.vectors - self.memory.krylov
             self._inverse, self.backend_note = make_inverse(
-                self.pencil, self.pos, self.backend, self.workers
+                self.pencil,
+                self.pos,
+                self.backend,
+                self.workers,
+                self.sparse_backend,
+                max(spare, 0),
             )
+            store = getattr(self._inverse, "store", None)
+            if store is not None:
+                self.memory.factor_bytes = store.factor_bytes
+                self.memory.factors_held = store.factors_alive
+                check_memory(self.memory, self.budget)
+                if store.on_demand:
+                    note = (
+                        f"factors of {store.capacity} of {int(np.count_nonzero(self.pos))} "
+                        f"harmonics held within the memory budget "
+                        f"({format_bytes(self.budget)}); the others refactorized on demand"
+                    )
+                    self.backend_note = f"{self.backend_note}; {note}".lstrip("; ")
             log.debug("A0 inverse: %s %s", self._inverse.name, self.backend_note)
         return self._inverse
 

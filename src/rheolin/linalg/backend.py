@@ -74,11 +74,18 @@ def choose_backend(n_dof: int, n_harmonics: int) -> list[str]:
 
 
 def make_inverse(
-    pencil: Pencil, ns: np.ndarray, backend: str = "auto", workers: int = 1
+    pencil: Pencil,
+    ns: np.ndarray,
+    backend: str = "auto",
+    workers: int = 1,
+    sparse_backend: str = "auto",
+    factor_budget: int | None = None,
 ) -> tuple[BlockInverse, str]:
     """The inverse of ``A0(n)`` for ``ns`` by ``backend``, and a note when it fell back.
 
-    ``"modal"`` falls back to ``"lu"`` (and says so) when its accuracy check fails.
+    ``"modal"`` falls back to ``"lu"`` (and says so) when its accuracy check fails. Sparse
+    ``"lu"`` factorizes with ``sparse_backend`` (:mod:`rheolin.linalg.direct`) and holds
+    the factors within ``factor_budget`` bytes (None: all).
     Raises :class:`SingularBlockError` when a block is singular.
     """
     if backend not in BACKENDS:
@@ -93,7 +100,7 @@ def make_inverse(
                 return ModalInverse(pencil, ns), note
             if name == "dense":
                 return BatchedLUInverse(pencil, ns), note
-            return LUInverse(pencil, ns, workers), note
+            return LUInverse(pencil, ns, workers, sparse_backend, factor_budget), note
         except ModalUnavailable as exc:
             note = f"modal resolvent not used ({exc})"
             log.debug(note)

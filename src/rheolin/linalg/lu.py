@@ -1,9 +1,8 @@
-"""``A0(n)^-1`` by LU factorizations: one SuperLU (or LAPACK) factor per harmonic, or one
-batched LAPACK call over every harmonic of a small dense system."""
+"""``A0(n)^-1`` by LU factorizations: one sparse (PARDISO, UMFPACK or SuperLU) or LAPACK factor
+per harmonic, or one batched LAPACK call over every harmonic of a small dense system."""
 
 from __future__ import annotations
 
-import functools
 import logging
 import warnings
 from collections.abc import Callable, Sequence
@@ -11,26 +10,15 @@ from typing import Any
 
 import numpy as np
 import scipy.linalg as sla
-import scipy.sparse.linalg as spla
 
 from .errors import SingularBlockError
 from .pencil import Pencil
 from .pool import map_chunks
+from .store import FactorStore
 
-__all__ = ["SPLU_OPTIONS", "BatchedLUInverse", "LUInverse"]
+__all__ = ["BatchedLUInverse", "LUInverse"]
 
 log = logging.getLogger(__name__)
-
-#: SuperLU options for the per-harmonic blocks. Structural matrices are structurally
-#: symmetric; threshold pivoting that prefers the diagonal keeps the fill of the symmetric
-#: ordering. Partial pivoting (SuperLU's default) multiplied the fill by 80 on indefinite
-#: mid-range harmonics of a chain (3.8e6 vs 4.7e4 entries, 1.6 s vs 10 ms per factor).
-#: The recomputed residual of every solution guards the accuracy.
-SPLU_OPTIONS: dict[str, Any] = {
-    "permc_spec": "MMD_AT_PLUS_A",
-    "diag_pivot_thresh": 0.1,
-    "options": {"SymmetricMode": True},
-}
 
 #: A pivot below this times the largest is round-off: the block is singular.
 _PIVOT_RTOL = 1e3 * np.finfo(float).eps
@@ -38,52 +26,8 @@ _PIVOT_RTOL = 1e3 * np.finfo(float).eps
 Solver = Callable[[np.ndarray], np.ndarray]
 
 
-@functools.lru_cache(maxsize=8)
-def _probe_vector(size: int) -> np.ndarray:
-    """A fixed random right-hand side that checks each factorization (made once per size)."""
-    b = np.random.default_rng(size).standard_normal(size)
-    b.setflags(write=False)
-    return b
-
-
-def _splu_checked(A: Any, n: int) -> Any:
-    """Sparse LU with diagonal-preferring pivoting, checked; partial pivoting if inaccurate."""
-    b = _probe_vector(A.shape[0])
-    for options in (SPLU_OPTIONS, {"permc_spec": "MMD_AT_PLUS_A"}):
-        try:
-            lu = spla.splu(A, **options)
-        except RuntimeError as exc:
-            raise SingularBlockError(n, str(exc)) from None
-        diag = np.abs(lu.U.diagonal())
-        if diag.size and diag.min() <= _PIVOT_RTOL * diag.max():
-            raise SingularBlockError(n, "pivot below round-off")
-        x = lu.solve(b.astype(A.dtype))
-        if np.linalg.norm(A @ x - b) <= 1e-11 * np.linalg.norm(b):
-            return lu
-        log.debug("A0(%d): threshold pivoting inaccurate; refactorizing", n)
-    return lu
-
-
-def _factor(pencil: Pencil, n: int) -> Solver:
+def _dense_factor(pencil: Pencil, n: int) -> Solver:
     A = pencil.matrix(n)
-    if pencil.sparse:
-        lu = _splu_checked(A, n)
-        if np.isrealobj(A):
-
-            def solve_real(r: np.ndarray, lu: Any = lu) -> np.ndarray:
-                if r.ndim == 1:
-                    both = lu.solve(np.column_stack([r.real, r.imag]))
-                    return both[:, 0] + 1j * both[:, 1]
-                return lu.solve(np.ascontiguousarray(r.real)) + 1j * lu.solve(
-                    np.ascontiguousarray(r.imag)
-                )
-
-            return solve_real
-
-        def solve_complex(r: np.ndarray, lu: Any = lu) -> np.ndarray:
-            return np.asarray(lu.solve(r.astype(complex)))
-
-        return solve_complex
     lu_piv = _lu_factor(A)
     d = np.abs(np.diag(lu_piv[0]))
     if d.min() <= _PIVOT_RTOL * d.max():
@@ -108,30 +52,52 @@ def _nonzero_rows(R: np.ndarray) -> np.ndarray:
 
 
 class LUInverse:
-    """One LU factor of ``A0(n)`` per harmonic (SuperLU when sparse, LAPACK when dense).
+    """One LU factor of ``A0(n)`` per harmonic.
 
-    ``workers > 1`` runs the factorizations and solves on the shared long-lived pool.
+    Sparse pencils go through a :class:`~rheolin.linalg.store.FactorStore` (the sparse
+    backend ``sparse_backend``, one symbolic analysis for every harmonic, factors held
+    within ``budget`` bytes and refactorized on demand beyond it); dense ones through LAPACK.
+    ``workers > 1`` runs the per-harmonic work on the shared long-lived pool.
     """
 
     name = "lu"
     exact = True
 
-    def __init__(self, pencil: Pencil, ns: np.ndarray, workers: int = 1) -> None:
+    def __init__(
+        self,
+        pencil: Pencil,
+        ns: np.ndarray,
+        workers: int = 1,
+        sparse_backend: str = "auto",
+        budget: int | None = None,
+    ) -> None:
         self.pencil, self.ns, self.workers = pencil, np.asarray(ns), int(workers)
+        self.store: FactorStore | None = None
+        self._factors: list[Solver] = []
+        if pencil.sparse:
+            self.store = FactorStore(pencil, self.ns, sparse_backend, budget, self.workers)
+            if not self.store.on_demand:  # factorize now, as the dense path does
+                self.store.each(np.arange(self.ns.size), lambda i, f: None)
+            self.sparse_backend = self.store.name
+            return
         factors: list[Solver | None] = [None] * len(self.ns)
 
         def run(chunk: Sequence[int]) -> None:
             for i in chunk:
-                factors[i] = _factor(pencil, int(self.ns[i]))
+                factors[i] = _dense_factor(pencil, int(self.ns[i]))
 
         map_chunks(run, len(factors), self.workers)
-        self._factors: list[Solver] = factors  # type: ignore[assignment]
+        self._factors = factors  # type: ignore[assignment]
         log.debug("factorized %d blocks of size %d", len(factors), pencil.n)
 
-    def _each(self, idx: np.ndarray, fn: Callable[[int], None]) -> None:
+    def _each(self, idx: np.ndarray, fn: Callable[[int, Solver], None]) -> None:
+        if self.store is not None:
+            self.store.each(idx, lambda i, f: fn(i, f.solve))
+            return
+
         def run(chunk: Sequence[int]) -> None:
             for j in chunk:
-                fn(int(idx[j]))
+                fn(int(idx[j]), self._factors[int(idx[j])])
 
         map_chunks(run, idx.size, self.workers)
 
@@ -139,8 +105,8 @@ class LUInverse:
         """``A0(n)^-1 r_n`` for every row (harmonic) of ``R``; zero rows stay zero."""
         out = np.zeros_like(R, dtype=complex)
 
-        def one(i: int) -> None:
-            out[i] = self._factors[i](R[i])
+        def one(i: int, solve: Solver) -> None:
+            out[i] = solve(R[i])
 
         self._each(_nonzero_rows(R), one)
         return out
@@ -151,8 +117,8 @@ class LUInverse:
         E[cols, np.arange(cols.size)] = 1.0
         G = np.empty((self.ns.size, rows.size, cols.size), dtype=complex)
 
-        def one(i: int) -> None:
-            G[i] = self._factors[i](E)[rows]
+        def one(i: int, solve: Solver) -> None:
+            G[i] = solve(E)[rows]
 
         self._each(np.arange(self.ns.size), one)
         return lambda Z: np.einsum("hij,hj->hi", G, Z)

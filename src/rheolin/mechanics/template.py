@@ -119,6 +119,13 @@ class SpeedTemplate:
                 self.node_index[(b.name, i)] = len(self.node_index)
                 self.dof_labels += [(b.name, i, c) for c in COMPONENTS]
         self.n_dof = 6 * len(self.node_index)
+        self.modal_dofs: dict[str, np.ndarray] = {}
+        for b in model.bodies.values():  # modal DOFs of condensed bodies after every node
+            modes = b.data["condensed"].n_modes if b.kind == "condensed" else 0
+            if modes:
+                self.modal_dofs[b.name] = self.n_dof + np.arange(modes)
+                self.dof_labels += [(b.name, -1 - j, "mode") for j in range(modes)]
+                self.n_dof += modes
         dof = {key: 6 * v + np.arange(6) for key, v in self.node_index.items()}
         terms = self._body_terms(model)
         self.joints: dict[str, SpeedTerm] = {}
@@ -171,7 +178,11 @@ class SpeedTemplate:
                     terms.append(beam_speed_term((first + i, first + i + 1), mats, b.axis, s))
             elif b.kind == "condensed":
                 local = b.data["condensed"]
-                placed = replace(local, nodes=[first + i for i in local.nodes])
+                placed = replace(
+                    local,
+                    nodes=[first + i for i in local.nodes],
+                    modal_dofs=self.modal_dofs.get(b.name, ()),
+                )
                 terms.append(placed.speed_term(b.axis, s))
             for i, rn in b.disks.items():
                 terms.append(rn.speed_term(self.node_index[(b.name, i)], b.axis, s))

@@ -41,6 +41,8 @@ def solve(
     options: Mapping[str, Any] | None = None,
     x0: Solution | np.ndarray | None = None,
     backend: str = "auto",
+    sparse_backend: str = "auto",
+    memory_budget: str | int | None = None,
 ) -> Solution:
     """Periodic steady state of ``M(t) q'' + D(t) q' + K(t) q = f(t)`` by harmonic balance.
 
@@ -84,6 +86,15 @@ def solve(
         (sparse LU per harmonic), ``"dense"`` (batched dense LU, small systems) or
         ``"modal"`` (one eigendecomposition for every harmonic; falls back to ``"lu"`` when
         its accuracy check fails). See :mod:`rheolin.linalg`.
+    sparse_backend
+        Sparse direct solver behind ``"lu"``: ``"auto"`` (the fastest installed: MKL
+        PARDISO, then UMFPACK via kvxopt, then SciPy's SuperLU), or one of those by name
+        (:mod:`rheolin.linalg.direct`).
+    memory_budget
+        What the solve may use (bytes or ``"8 GB"``); default ``RHEOLIN_SOLVE_MEMORY``, else
+        most of the memory available (:func:`rheolin.budget.solve_budget`). The estimate is
+        checked before allocating (:class:`~rheolin.budget.MemoryBudgetError` with the
+        estimate and what to change); factors beyond it are refactorized on demand.
 
     Returns
     -------
@@ -113,7 +124,14 @@ def solve(
     if method not in allowed:
         raise ValueError(f"`method` must be one of {allowed}, got {method!r}")
     opts = Options(rtol=float(rtol), maxiter=maxiter, callback=callback, extra=dict(options or {}))
-    op = HarmonicBalance(system, hset, workers=workers, backend=backend)
+    op = HarmonicBalance(
+        system,
+        hset,
+        workers=workers,
+        backend=backend,
+        sparse_backend=sparse_backend,
+        memory_budget=memory_budget,
+    )
     opts.x0 = _initial_guess(op, x0)
     sol = _auto(op, opts) if method == "auto" else _finish(op, _run(method, op, opts), opts)
     return _check_stability(system, sol, stability)
@@ -209,6 +227,11 @@ def _finish(op: HarmonicBalance, out: SolverOutcome, opts: Options, note: str = 
     if not success:
         log.warning("%s: %s", out.method, message)
     info = dict(out.info)
+    info["memory_estimate"] = op.memory.total
+    store = getattr(op._inverse, "store", None)
+    if store is not None:
+        info["sparse_backend"] = store.name
+        info["refactorizations"] = store.refactorizations
     if op.backend_note:
         info["backend_note"] = op.backend_note
     return Solution(
