@@ -74,6 +74,25 @@ def _um(x: float) -> str:
     return f"{x * 1e6:.3g} µm"
 
 
+def _stability_detail(s: dict[str, Any]) -> str:
+    """`` (lattice Hill of order 2, 35 harmonics, decided; least damped exponent ...)``."""
+    if s.get("max_floquet_real") is None:
+        return ""
+    method = s.get("floquet_method")
+    how = f"{method} Hill" if method else "Hill"
+    if s.get("floquet_lattice_order") is not None:
+        how += f" of order {s['floquet_lattice_order']}, {s['floquet_lattice_size']} harmonics"
+    if s.get("stability_decided") is not None:
+        how += ", decided" if s["stability_decided"] else ", UNDECIDED (truncation too coarse)"
+    lead = f"largest Floquet real part {s['max_floquet_real']:.4g} 1/s"
+    if s.get("leading_exponent_frequency_hz") is not None:
+        lead += f" at {s['leading_exponent_frequency_hz']:.5g} Hz"
+    if s.get("floquet_seconds") is not None:
+        how += f", {s['floquet_seconds']:.2g} s"
+    mech = f"\n  mechanism: {s['stability_mechanism']}" if s.get("stability_mechanism") else ""
+    return f" ({how}; {lead}){escape(mech)}"
+
+
 def print_summary(console: Console, s: dict[str, Any], seconds: float) -> None:
     """Readable summary of one operating point (the dict of ``rheolin.results.summarize``)."""
     ok = "[green]converged[/green]" if s["success"] else "[red]NOT successful[/red]"
@@ -88,12 +107,7 @@ def print_summary(console: Console, s: dict[str, Any], seconds: float) -> None:
     )
     stab = s["stability"]
     colour = {"stable": "green", "unstable": "red"}.get(stab, "yellow")
-    extra = (
-        ""
-        if s["max_floquet_real"] is None
-        else f" (max Floquet real part {s['max_floquet_real']:.3g} 1/s)"
-    )
-    console.print(f"stability: [{colour}]{stab}[/{colour}]{extra}")
+    console.print(f"stability: [{colour}]{stab}[/{colour}]{_stability_detail(s)}")
     console.print(f"[dim]{escape(str(s['message']))}[/dim]")
     t = Table(title="Largest responses per body (radial, single-sided amplitude)")
     for col in ("body", "node", "static", "dynamic (sum)", "largest harmonics"):

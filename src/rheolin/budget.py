@@ -19,7 +19,12 @@ __all__ = [
     "format_bytes",
     "memory_budget",
     "parse_bytes",
+    "solve_budget",
 ]
+
+#: Share of the memory available now that a harmonic-balance solve may use by default (the
+#: factors of ``A0(n)`` are held while they fit it, see :mod:`rheolin.linalg.memory`).
+SOLVE_SHARE = 0.8
 
 #: The default budget when nothing is set and the machine has room [bytes].
 DEFAULT_BUDGET = 4 * 2**30
@@ -80,17 +85,43 @@ def available_memory() -> int | None:
     return None
 
 
+def _env_bytes(name: str) -> int | None:
+    """Bytes from the environment variable ``name``, or None when it is unset."""
+    text = os.environ.get(name)
+    if not text:
+        return None
+    try:
+        return parse_bytes(text)
+    except ValueError as exc:
+        raise ValueError(f"{name}: {exc}") from None
+
+
 def memory_budget(override: str | int | float | None = None) -> int:
     """The budget in bytes: ``override``, else ``RHEOLIN_MEMORY_BUDGET``, else the default."""
     if override is not None:
         return parse_bytes(override)
-    env = os.environ.get("RHEOLIN_MEMORY_BUDGET")
-    if env:
-        try:
-            return parse_bytes(env)
-        except ValueError as exc:
-            raise ValueError(f"RHEOLIN_MEMORY_BUDGET: {exc}") from None
+    env = _env_bytes("RHEOLIN_MEMORY_BUDGET")
+    if env is not None:
+        return env
     avail = available_memory()
     if avail is None:
         return DEFAULT_BUDGET
     return int(min(DEFAULT_BUDGET, max(avail // 2, 256 * 2**20)))
+
+
+def solve_budget(override: str | int | float | None = None) -> int:
+    """The budget of one harmonic-balance solve [bytes]: ``override``, else
+    ``RHEOLIN_SOLVE_MEMORY``, else most (:data:`SOLVE_SHARE`) of the memory available now.
+
+    Larger than :func:`memory_budget`'s default, which guards optional extras (a stability
+    check); a solve's factors are what the machine is there for.
+    """
+    if override is not None:
+        return parse_bytes(override)
+    env = _env_bytes("RHEOLIN_SOLVE_MEMORY")
+    if env is not None:
+        return env
+    avail = available_memory()
+    if avail is None:
+        return DEFAULT_BUDGET
+    return int(max(SOLVE_SHARE * avail, 256 * 2**20))

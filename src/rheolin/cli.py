@@ -282,8 +282,11 @@ def campbell(
     speeds: str = typer.Option(..., help="start:stop:step with unit, e.g. 100:6000:100rpm."),
     out: Path = OUT,
     fmax: float = typer.Option(None, help="Plot up to this frequency [Hz] (default: auto)."),
+    stability: str = STABILITY,
 ) -> None:
-    """Campbell diagram: DIR/campbell.nc and DIR/campbell.png, critical speeds printed."""
+    """Campbell diagram: DIR/campbell.nc and DIR/campbell.png, critical speeds printed;
+    with the Floquet stability of the full time-periodic system at every speed (as run and
+    sweep: auto checks whenever it fits the memory budget)."""
     from .stability import campbell as campbell_fn
 
     lm = _load(model)
@@ -291,14 +294,22 @@ def campbell(
         w = parse_speeds(speeds)
     except ModelError as exc:
         raise _fail(str(exc)) from None
+    flags = {"auto": None, "on": True, "off": False}
+    if stability.lower() not in flags:
+        raise _fail(f"--stability must be auto, on or off, got {stability!r}")
     from .plots.campbell import plot_campbell
     from .results.dataset import write_dataset
 
     out_dir = Path(out) if out is not None else Path(f"{model.stem}_campbell")
     with err.status("Campbell diagram"):
         result = campbell_fn(lm.model, w)
+    smap, why = _campbell_stability(lm.model, w, flags[stability.lower()])
     write_dataset(result.to_dataset(), out_dir / "campbell.nc")
-    plot_campbell(result, out_dir / "campbell.png", fmax)
+    written = [out_dir / "campbell.nc", out_dir / "campbell.png"]
+    if smap is not None:
+        write_dataset(smap.to_dataset(), out_dir / "stability_map.nc")
+        written.append(out_dir / "stability_map.nc")
+    plot_campbell(result, out_dir / "campbell.png", fmax, stability=smap)
     table = Table(title=f"critical speeds of {model.name} (order-line crossings)")
     for col in ("order", "mode", "whirl", "speed (rpm)", "frequency (Hz)"):
         table.add_column(col, justify="right" if "(" in col or col == "mode" else "left")
@@ -311,7 +322,47 @@ def campbell(
             f"{c.frequency / (2 * np.pi):.2f}",
         )
     console.print(table if result.critical_speeds else "no order-line crossing in the speed range")
-    console.print(f"wrote {out_dir / 'campbell.nc'}, {out_dir / 'campbell.png'}")
+    if smap is None:
+        console.print(f"[yellow]stability: not checked[/yellow] ({why})")
+    elif not smap.ranges:
+        undecided = int((~np.asarray(smap.decided, bool)).sum())
+        note = f" ({undecided} speeds undecided)" if undecided else ""
+        console.print(
+            f"stability (Floquet, full periodic system): [green]stable at every speed[/green]{note}"
+        )
+    else:
+        for r in smap.ranges:
+            console.print(
+                f"[red]unstable[/red] {r.lower * 30 / np.pi:.1f}..{r.upper * 30 / np.pi:.1f} rpm: "
+                f"{escape(r.label)}"
+            )
+    console.print("wrote " + ", ".join(str(p) for p in written))
+
+
+def _campbell_stability(model: Any, speeds: np.ndarray, flag: bool | None) -> tuple[Any, str]:
+    """The stability map over the Campbell speeds (None and why when it is not computed)."""
+    if flag is False:
+        return None, "--stability off"
+    from .budget import format_bytes, memory_budget
+    from .floquet import floquet_memory
+    from .stability import stability_map as map_fn
+
+    kind, estimate = floquet_memory(model.assemble(float(speeds[-1])).system)
+    if flag is None and estimate > memory_budget():
+        return None, (
+            f"the {kind} Hill problem needs an estimated {format_bytes(estimate)}, more than "
+            f"the memory budget of {format_bytes(memory_budget())}"
+        )
+    columns = (TextColumn("{task.description}"), BarColumn(), TimeRemainingColumn())
+    with Progress(*columns, console=err) as bar:
+        task = bar.add_task("Floquet stability", total=len(speeds))
+        smap = map_fn(
+            model,
+            speeds,
+            refine=MAP_PRECISION,
+            progress=lambda i, r: bar.update(task, advance=1),
+        )
+    return smap, ""
 
 
 @app.command()

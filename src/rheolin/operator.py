@@ -11,61 +11,23 @@ part ``dA`` is applied as a sparse convolution over harmonic indices, never asse
 
 from __future__ import annotations
 
-import functools
 import logging
-import os
-from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
+from .budget import format_bytes, solve_budget
 from .harmonics import HarmonicSet
+from .linalg import BlockInverse, Pencil, SingularBlockError, default_workers, make_inverse
+from .linalg.memory import SolveMemory
+from .linalg.memory import check as check_memory
 from .system import PeriodicSystem
 
-__all__ = ["HarmonicBalance", "SingularBlockError"]
+__all__ = ["HarmonicBalance", "SingularBlockError", "default_workers"]
 
 log = logging.getLogger(__name__)
-
-
-class SingularBlockError(RuntimeError):
-    """``A0(n)`` could not be factorized (exactly singular: an undamped resonance)."""
-
-    def __init__(self, n: int, detail: str) -> None:
-        super().__init__(f"A0(n={n}) is singular ({detail})")
-        self.n = n
-
-
-#: SuperLU options for the per-harmonic blocks. Structural matrices are structurally
-#: symmetric; threshold pivoting that prefers the diagonal keeps the fill of the symmetric
-#: ordering. Partial pivoting (SuperLU's default) multiplied the fill by 80 on indefinite
-#: mid-range harmonics of a chain (3.8e6 vs 4.7e4 entries, 1.6 s vs 10 ms per factor).
-#: The recomputed residual of every solution guards the accuracy.
-SPLU_OPTIONS: dict[str, Any] = {
-    "permc_spec": "MMD_AT_PLUS_A",
-    "diag_pivot_thresh": 0.1,
-    "options": {"SymmetricMode": True},
-}
-
-
-def default_workers() -> int:
-    """Threads for per-harmonic work: the cores available, at most 8."""
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - non-Linux
-        cores = os.cpu_count() or 1
-    return max(1, min(cores, 8))
-
-
-@functools.lru_cache(maxsize=8)
-def _probe_vector(size: int) -> np.ndarray:
-    """A fixed random right-hand side that checks each factorization (made once per size)."""
-    b = np.random.default_rng(size).standard_normal(size)
-    b.setflags(write=False)
-    return b
 
 
 class _Block:
@@ -149,11 +111,29 @@ class HarmonicBalance:
     harmonics
         The symmetric harmonic set ``H``.
     workers
-        Threads for the per-harmonic factorizations and solves.
+        Threads for the per-harmonic factorizations and solves (one long-lived pool).
+    backend
+        Inverse of ``A0(n)``: ``"auto"``, ``"lu"``, ``"dense"`` or ``"modal"``
+        (:mod:`rheolin.linalg`).
+    sparse_backend
+        Sparse direct solver of ``lu``: ``"auto"``, ``"pardiso"``, ``"umfpack"`` or
+        ``"superlu"`` (:mod:`rheolin.linalg.direct`).
+    memory_budget
+        Bytes (or ``"8 GB"``) the solve may use; default :func:`rheolin.budget.solve_budget`.
+        The estimate (:attr:`memory`) is checked before the load vector is allocated
+        (:class:`~rheolin.budget.MemoryBudgetError`), and the factors are held only while
+        they fit.
     """
 
     def __init__(
-        self, system: PeriodicSystem, harmonics: HarmonicSet, *, workers: int | None = None
+        self,
+        system: PeriodicSystem,
+        harmonics: HarmonicSet,
+        *,
+        workers: int | None = None,
+        backend: str = "auto",
+        sparse_backend: str = "auto",
+        memory_budget: str | int | None = None,
     ) -> None:
         self.system = system
         self.harmonics = harmonics
@@ -163,13 +143,19 @@ class HarmonicBalance:
         self.w1 = system.omega
         self.workers = default_workers() if workers is None else max(1, int(workers))
         self.sparse = system.is_sparse
-        self._where = {int(n): i for i, n in enumerate(self.pos)}
         self._weights = np.where(self.pos == 0, 1.0, 2.0)
-        self._factors: list[Callable[[np.ndarray], np.ndarray]] | None = None
-        self._pattern: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self.backend = backend
+        self.backend_note = ""
+        self._inverse: BlockInverse | None = None
+        self._last_residual: tuple[np.ndarray, int, np.ndarray] | None = None
         self._support_maps: tuple[Any, sp.csr_array, sp.csr_array] | None = None
         self._blocks = {k: self._block(k) for k in [0, *system.coefficient_harmonics]}
+        self.pencil = self._pencil()
         self._coupling = self._coupling_maps()
+        self.sparse_backend = sparse_backend
+        self.budget = solve_budget(memory_budget)
+        self.memory = SolveMemory(self.n_dof, int(self.pos.size), int(self.support[0].size))
+        check_memory(self.memory, self.budget)
         self.rhs = np.zeros((self.pos.size, self.n_dof), dtype=complex)
         for i, n in enumerate(self.pos):
             if int(n) in system.f:
@@ -187,31 +173,29 @@ class HarmonicBalance:
         s = self.system
         return _Block(get(s.M), get(s.D), get(s.K), self.n_dof, self.sparse)
 
+    def _pencil(self) -> Pencil:
+        """``A0(n)`` on the union pattern of ``K_0, D_0, M_0`` (built once from block 0)."""
+        s = self.system
+        if not self.sparse:
+            return Pencil(s.K.get(0), s.D.get(0), s.M.get(0), self.w1)
+        rows, cols, values = self._blocks[0].entries()  # CSC order
+        indptr = np.searchsorted(cols, np.arange(self.n_dof + 1))
+        return Pencil.from_csc(indptr, rows, values.real, self.w1)  # X_0 is real
+
     def _coupling_maps(self) -> list[tuple[_Block, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
         """For each ``k != 0``: rows ``m >= 0`` and columns ``n = m - k in H``."""
         maps = []
-        in_h = set(int(n) for n in self.full)
+        H = self.full
         for k, block in self._blocks.items():
             if k == 0:
                 continue
-            rows, src, neg, nvals = [], [], [], []
-            for i, m in enumerate(self.pos):
-                n = int(m) - k
-                if n in in_h:
-                    rows.append(i)
-                    src.append(self._where[abs(n)])
-                    neg.append(n < 0)
-                    nvals.append(n)
-            if rows:
-                maps.append(
-                    (
-                        block,
-                        np.array(rows),
-                        np.array(src),
-                        np.array(neg, dtype=bool),
-                        1j * self.w1 * np.array(nvals, dtype=float),
-                    )
-                )
+            n = self.pos - k
+            j = np.clip(np.searchsorted(H, n), 0, H.size - 1)
+            rows = np.flatnonzero(H[j] == n)
+            if rows.size:
+                nv = n[rows]
+                src = np.searchsorted(self.pos, np.abs(nv))
+                maps.append((block, rows, src, nv < 0, 1j * self.w1 * nv.astype(float)))
         return maps
 
     @property
@@ -283,39 +267,15 @@ class HarmonicBalance:
 
     def expand(self, Q: np.ndarray) -> np.ndarray:
         """Full coefficients over ``H`` (shape (|H|, n_dof)) from the half ``n >= 0``."""
-        out = np.empty((self.full.size, self.n_dof), dtype=complex)
-        for j, n in enumerate(self.full):
-            v = Q[self._where[abs(int(n))]]
-            out[j] = v if n >= 0 else np.conj(v)
+        out = Q[np.searchsorted(self.pos, np.abs(self.full))].astype(complex)
+        neg = self.full < 0
+        out[neg] = np.conj(out[neg])
         return out
 
     # ------------------------------------------------------------------ operators
-    def _A0_pattern(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The union CSC pattern of ``K_0, D_0, M_0`` and their values on it (rows K, D, M).
-
-        Built once: every ``A0(n)`` is then one vector operation on these values instead of
-        three sparse additions (which cost more than the factorization of a 126-DOF block).
-        """
-        if self._pattern is None:
-            rows, cols, values = self._blocks[0].entries()
-            indptr = np.searchsorted(cols, np.arange(self.n_dof + 1)).astype(np.int64)
-            self._pattern = (indptr, rows.astype(np.int64), values.real)  # X_0 is real
-        return self._pattern
-
     def A0_matrix(self, n: int) -> Any:
         """``A0(n) = -(n w1)^2 M_0 + i n w1 D_0 + K_0`` (sparse CSC or dense)."""
-        s = 1j * n * self.w1
-        if self.sparse:
-            indptr, indices, (k0, d0, m0) = self._A0_pattern()
-            data = k0 + s * d0 + (s * s) * m0 if n else k0.copy()
-            return sp.csc_array((data, indices.copy(), indptr.copy()), shape=(self.n_dof,) * 2)
-        b = self._blocks[0]
-        terms = [(b.K, 1.0), (b.D, s), (b.M, s * s)]
-        acc = np.zeros((self.n_dof, self.n_dof), dtype=complex if n else float)
-        for x, c in terms:
-            if x is not None:
-                acc = acc + (x * c if n else x * c.real)
-        return acc
+        return self.pencil.matrix(n)
 
     def apply_A0(self, Q: np.ndarray) -> np.ndarray:
         """``A0 q`` by matrix products (not through the factors)."""
@@ -328,7 +288,19 @@ class HarmonicBalance:
         return out
 
     def apply_dA(self, Q: np.ndarray) -> np.ndarray:
-        """``dA q`` on rows ``m >= 0`` as a sparse convolution over harmonic indices."""
+        """``dA q`` on rows ``m >= 0`` as a sparse convolution over harmonic indices.
+
+        Through the support matrices of :meth:`apply_dA_support` when a solver has built them
+        for the whole support (one sparse product), else block by block.
+        """
+        rows, cols = self.support
+        if self._support_maps is not None and self._support_maps[0] == (
+            rows.tobytes(),
+            cols.tobytes(),
+        ):
+            out = np.zeros_like(Q, dtype=complex)
+            out[:, rows] = self.apply_dA_support(Q[:, cols], rows, cols)
+            return out
         out = np.zeros_like(Q, dtype=complex)
         for block, rows, src, neg, s in self._coupling:
             X = Q[src] if block.full else Q[np.ix_(src, block.cols)]
@@ -344,113 +316,69 @@ class HarmonicBalance:
         """``A q = A0 q + dA q``."""
         return self.apply_A0(Q) + self.apply_dA(Q)
 
+    def residual(self, Q: np.ndarray) -> np.ndarray:
+        """``f - A q`` on the half ``n >= 0`` (the last one is kept: a solver that refines
+        against it and the final check of :func:`rheolin.solve` share one product)."""
+        last = self._last_residual
+        if last is not None and last[0] is Q and last[1] == Q.tobytes().__hash__():
+            return last[2]
+        R = self.rhs - self.apply(Q)
+        self._last_residual = (Q, Q.tobytes().__hash__(), R)
+        return R
+
     def relative_residual(self, Q: np.ndarray) -> float:
         """``||f - A q|| / ||f||`` over the full harmonic set (independent of any solver)."""
-        r = self.norm(self.rhs - self.apply(Q))
+        r = self.norm(self.residual(Q))
         return r / self.rhs_norm if self.rhs_norm > 0 else r
 
     # ------------------------------------------------------------------ factors
-    def _factor(self, n: int) -> Callable[[np.ndarray], np.ndarray]:
-        A = self.A0_matrix(n)
-        if self.sparse:
-            lu = self._splu_checked(A, n)
-            if np.isrealobj(A):
-
-                def solve_real(r: np.ndarray, lu: Any = lu) -> np.ndarray:
-                    if r.ndim == 1:
-                        both = lu.solve(np.column_stack([r.real, r.imag]))
-                        return both[:, 0] + 1j * both[:, 1]
-                    return lu.solve(np.ascontiguousarray(r.real)) + 1j * lu.solve(
-                        np.ascontiguousarray(r.imag)
+    @property
+    def inverse(self) -> BlockInverse:
+        """``A0(n)^-1`` for every ``n >= 0`` (made on first use by :attr:`backend`)."""
+        if self._inverse is None:
+            spare = self.budget - self.memory.vectors - self.memory.krylov
+            self._inverse, self.backend_note = make_inverse(
+                self.pencil,
+                self.pos,
+                self.backend,
+                self.workers,
+                self.sparse_backend,
+                max(spare, 0),
+            )
+            store = getattr(self._inverse, "store", None)
+            if store is not None:
+                self.memory.factor_bytes = store.factor_bytes
+                self.memory.factors_held = store.factors_alive
+                check_memory(self.memory, self.budget)
+                if store.on_demand:
+                    note = (
+                        f"factors of {store.capacity} of {int(np.count_nonzero(self.pos))} "
+                        f"harmonics held within the memory budget "
+                        f"({format_bytes(self.budget)}); the others refactorized on demand"
                     )
-
-                return solve_real
-
-            def solve_complex(r: np.ndarray, lu: Any = lu) -> np.ndarray:
-                return np.asarray(lu.solve(r.astype(complex)))
-
-            return solve_complex
-        lu_piv = sla.lu_factor(A, check_finite=False)
-        d = np.abs(np.diag(lu_piv[0]))
-        if d.min() <= 1e3 * np.finfo(float).eps * d.max():
-            raise SingularBlockError(n, "pivot below round-off")
-
-        def solve_dense(r: np.ndarray, f: Any = lu_piv) -> np.ndarray:
-            return np.asarray(sla.lu_solve(f, r.astype(complex), check_finite=False))
-
-        return solve_dense
-
-    @staticmethod
-    def _splu_checked(A: Any, n: int) -> Any:
-        """Sparse LU with diagonal-preferring pivoting, checked; partial pivoting if inaccurate."""
-        b = _probe_vector(A.shape[0])
-        for options in (SPLU_OPTIONS, {"permc_spec": "MMD_AT_PLUS_A"}):
-            try:
-                lu = spla.splu(A, **options)
-            except RuntimeError as exc:
-                raise SingularBlockError(n, str(exc)) from None
-            diag = np.abs(lu.U.diagonal())
-            if diag.size and diag.min() <= 1e3 * np.finfo(float).eps * diag.max():
-                raise SingularBlockError(n, "pivot below round-off")
-            x = lu.solve(b.astype(A.dtype))
-            if np.linalg.norm(A @ x - b) <= 1e-11 * np.linalg.norm(b):
-                return lu
-            log.debug("A0(%d): threshold pivoting inaccurate; refactorizing", n)
-        return lu
+                    self.backend_note = f"{self.backend_note}; {note}".lstrip("; ")
+            log.debug("A0 inverse: %s %s", self._inverse.name, self.backend_note)
+        return self._inverse
 
     def factorize(self) -> None:
-        """Factorize ``A0(n)`` for every ``n >= 0`` (once; threads over harmonics)."""
-        if self._factors is not None:
-            return
-        ns = [int(n) for n in self.pos]
-        if self.workers > 1 and len(ns) > 1:
-            with ThreadPoolExecutor(self.workers) as pool:
-                self._factors = list(pool.map(self._factor, ns))
-        else:
-            self._factors = [self._factor(n) for n in ns]
-        log.debug("factorized %d blocks of size %d", len(ns), self.n_dof)
+        """Make the inverse of ``A0(n)`` for every ``n >= 0`` now (once)."""
+        _ = self.inverse
 
     def solve_A0(self, R: np.ndarray) -> np.ndarray:
         """``A0^-1 r`` for every harmonic ``n >= 0`` (rows of ``R``)."""
-        self.factorize()
-        assert self._factors is not None
-        factors = self._factors
-        out = np.empty_like(R, dtype=complex)
+        return self.inverse.solve(R)
 
-        def run(chunk: Sequence[int]) -> None:
-            for i in chunk:
-                out[i] = factors[i](R[i])
-
-        self._map_chunks(run, len(factors))
-        return out
+    def restricted_solver(
+        self, rows: np.ndarray, cols: np.ndarray
+    ) -> Callable[[np.ndarray], np.ndarray]:
+        """``Z -> (A0(n)^-1[rows, cols] z_n)_n`` over the harmonics ``n >= 0``."""
+        return self.inverse.restricted(rows, cols)
 
     def restricted_inverse(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
-        """``G_n = A0(n)^-1[rows, cols]`` for every ``n >= 0``, shape (|H+|, |rows|, |cols|).
-
-        One multi-column solve per harmonic with the unit vectors of ``cols``.
-        """
-        self.factorize()
-        assert self._factors is not None
-        factors = self._factors
-        E = np.zeros((self.n_dof, cols.size), dtype=complex)
-        E[cols, np.arange(cols.size)] = 1.0
-        out = np.empty((len(factors), rows.size, cols.size), dtype=complex)
-
-        def run(chunk: Sequence[int]) -> None:
-            for i in chunk:
-                out[i] = factors[i](E)[rows]
-
-        self._map_chunks(run, len(factors))
-        return out
-
-    def _map_chunks(self, run: Callable[[Sequence[int]], None], count: int) -> None:
-        idx = list(range(count))
-        if self.workers > 1 and count > 1:
-            chunks = [idx[j :: self.workers] for j in range(self.workers)]
-            with ThreadPoolExecutor(self.workers) as pool:
-                list(pool.map(run, chunks))
-        else:
-            run(idx)
+        """``G_n = A0(n)^-1[rows, cols]`` for every ``n >= 0``, shape (|H+|, |rows|, |cols|)."""
+        apply = self.restricted_solver(rows, cols)
+        eye = np.eye(cols.size, dtype=complex)
+        return np.stack([apply(np.broadcast_to(e, (self.pos.size, cols.size))) for e in eye], -1)
 
     # ------------------------------------------------------------------ coupled
     def coupled_matrix(self) -> sp.csc_array:

@@ -24,9 +24,18 @@ def _is_sparse(x: object) -> bool:
     return sp.issparse(x)
 
 
+def _sparse_data(x: Matrix) -> np.ndarray:
+    """The stored values of a sparse matrix, duplicates summed (no copy when canonical)."""
+    if getattr(x, "format", "") in ("csr", "csc") and x.has_canonical_format:
+        return np.asarray(x.data)
+    coo = x.tocoo()
+    coo.sum_duplicates()
+    return np.asarray(coo.data)
+
+
 def _max_abs(x: Matrix) -> float:
     if _is_sparse(x):
-        data = x.tocoo().data
+        data = _sparse_data(x)
         return float(np.max(np.abs(data))) if data.size else 0.0
     return float(np.max(np.abs(x))) if np.size(x) else 0.0
 
@@ -35,7 +44,20 @@ def _conj(x: Matrix) -> Matrix:
     return x.conj() if _is_sparse(x) else np.conj(x)
 
 
+def _same_pattern(a: Matrix, b: Matrix) -> bool:
+    return (
+        getattr(a, "format", "") == getattr(b, "format", "") in ("csr", "csc")
+        and a.has_canonical_format
+        and b.has_canonical_format
+        and np.array_equal(a.indptr, b.indptr)
+        and np.array_equal(a.indices, b.indices)
+    )
+
+
 def _close(a: Matrix, b: Matrix, scale: float) -> bool:
+    if _is_sparse(a) and _is_sparse(b) and _same_pattern(a, b):
+        diff = np.asarray(a.data) - np.asarray(b.data)  # no sparse subtraction needed
+        return _max_abs(diff) <= (1e-12 * float(scale) if scale > 0 else 0.0)
     diff = a - b
     return _max_abs(diff) <= (1e-12 * float(scale) if scale > 0 else 0.0)
 
@@ -134,7 +156,7 @@ class PeriodicSystem:
             k = cls._key(name, k_raw)
             where = f"`{name}[{k}]`"
             if _is_sparse(x):
-                x = sp.csr_array(x)
+                x = x if isinstance(x, sp.csr_array) else sp.csr_array(x)
                 if not np.all(np.isfinite(x.data)):
                     raise ModelError(f"{where} contains NaN or inf")
             else:
@@ -157,7 +179,7 @@ class PeriodicSystem:
                     x = x.real
                 x = x.astype(float)
             else:
-                x = x.astype(complex)
+                x = x.astype(complex, copy=False) if _is_sparse(x) else x.astype(complex)
             out[k] = x
         cls._fill_conjugates(name, out)
         return {k: v for k, v in sorted(out.items()) if _max_abs(v) > 0.0}

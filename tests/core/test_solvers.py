@@ -15,16 +15,22 @@ def _rel(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.linalg.norm(a - b) / np.linalg.norm(b))
 
 
-@pytest.mark.parametrize("method", METHODS)
+#: Inverses of A0(n) (``rheolin.linalg``); ``direct`` uses none, so it runs once.
+BACKENDS = ("auto", "lu", "dense", "modal")
+RUNS = [(m, b) for m in METHODS for b in BACKENDS if m != "direct" or b == "auto"]
+
+
+@pytest.mark.parametrize(("method", "backend"), RUNS)
 @pytest.mark.parametrize("case", CASES, ids=lambda c: c.name)
-def test_catalogue(case: Case, method: str) -> None:
+def test_catalogue(case: Case, method: str, backend: str) -> None:
+    """Every method with every backend against the case's independent reference."""
     system = case.system()
     if method == "lti" and not case.time_invariant:
         with pytest.raises(ValueError, match="lti"):
-            rl.solve(system, case.harmonics, method="lti")
+            rl.solve(system, case.harmonics, method="lti", backend=backend)
         return
     rtol = 1e-10
-    sol = rl.solve(system, case.harmonics, method=method, rtol=rtol)
+    sol = rl.solve(system, case.harmonics, method=method, rtol=rtol, backend=backend)
     assert sol.method == method
     assert np.array_equal(sol.harmonics, case.harmonics.indices)
     if method in case.converge:
@@ -115,11 +121,43 @@ def test_callback_and_maxiter() -> None:
     assert not capped.success and capped.status == 1 and capped.iterations <= 2
 
 
-def test_singular_time_averaged_system_is_status_3() -> None:
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_singular_time_averaged_system_is_status_3(backend: str) -> None:
     """Undamped oscillator forced exactly at resonance: ``A0(1)`` is singular."""
     s = rl.PeriodicSystem(2.0, M={0: np.eye(1)}, K={0: 4.0 * np.eye(1)}, f={1: np.ones(1)})
-    sol = rl.solve(s, 2, method="lti")
+    sol = rl.solve(s, 2, method="lti", backend=backend)
     assert not sol.success and sol.status == 3
+
+
+def test_modal_backend_falls_back_to_lu_for_a_massless_dof() -> None:
+    """A massless DOF hanging on a spring makes ``M_0`` singular: no modal resolvent; the LU
+    answer is the closed form ``x_1 = x_2 = f / (k1 - m W^2 + i c W)``."""
+    W, m, k1, k2, c = 3.0, 2.0, 50.0, 30.0, 0.4
+    M = np.diag([m, 0.0])
+    K = np.array([[k1 + k2, -k2], [-k2, k2]])
+    D = np.diag([c, 0.0])
+    s = rl.PeriodicSystem(W, M={0: M}, D={0: D}, K={0: K}, f={1: np.array([1.0, 0.0])})
+    sol = rl.solve(s, 1, method="lti", backend="modal", stability=False)
+    assert sol.success and "modal resolvent not used" in sol.info["backend_note"]
+    x = 1.0 / (k1 - m * W**2 + 1j * c * W)  # the massless DOF follows: x_2 = x_1
+    np.testing.assert_allclose(sol.harmonic(1), [x, x], rtol=1e-12)
+
+
+def test_warm_start_from_the_solution_needs_no_iteration() -> None:
+    """``x0`` = the converged answer: gmres stops at once, perturbation after one step, both
+    on the dense harmonic-balance reference; a guess of the wrong size is refused."""
+    case = next(c for c in CASES if c.name == "gravity_half_critical")
+    system = case.system()
+    cold = rl.solve(system, case.harmonics, method="gmres", rtol=1e-12)
+    assert cold.iterations >= 3
+    warm = rl.solve(system, case.harmonics, method="gmres", rtol=1e-10, x0=cold)
+    assert warm.success and warm.iterations <= 1 and warm.info["warm_start"]
+    assert _rel(warm.q, case.reference(warm.harmonics)) < case.ref_tol
+    pert = rl.solve(system, case.harmonics, method="perturbation", rtol=1e-10, x0=cold.q)
+    assert pert.success and pert.iterations <= 1
+    assert _rel(pert.q, case.reference(pert.harmonics)) < case.ref_tol
+    with pytest.raises(ValueError, match="x0"):
+        rl.solve(system, case.harmonics, x0=cold.q[:, :1])
 
 
 def test_zero_load_gives_zero_response() -> None:
@@ -209,3 +247,45 @@ def test_support_coupling_matches_the_assembled_coupled_matrix(sparse: bool) -> 
     expected = op.half(dAq)[:, rows]
     got = op.apply_dA_support(Q[:, cols], rows, cols)
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
+
+
+def test_threads_come_from_one_long_lived_pool() -> None:
+    """``workers=2`` with SuperLU: the reference answer, and the same two worker threads for
+    every solve (a new pool per factorization grew the resident memory by 450 MB over 500
+    solves)."""
+    import threading
+
+    case = next(c for c in CASES if c.name == "gravity_half_critical_sparse")
+    system = case.system()
+
+    def pool_threads() -> set[int]:
+        return {t.ident for t in threading.enumerate() if t.name.startswith("rheolin-2")}
+
+    seen = []
+    for _ in range(3):
+        sol = rl.solve(system, case.harmonics, backend="lu", workers=2, stability=False)
+        assert sol.success and _rel(sol.q, case.reference(sol.harmonics)) < case.ref_tol
+        seen.append(pool_threads())
+    assert seen[0] and seen[0] == seen[1] == seen[2]
+
+
+@pytest.mark.parametrize("backend", ["lu", "dense", "modal"])
+def test_full_strategy_on_every_backend_matches_direct(backend: str) -> None:
+    """Time variation on every DOF of an 80-DOF damped chain (the ``full`` gmres strategy,
+    support > 64): each backend against the assembled coupled system's sparse LU."""
+    import scipy.sparse as sps
+
+    n = 80
+    main = 2.0 + np.linspace(0.0, 1.0, n)
+    K0 = sps.diags([-np.ones(n - 1), main, -np.ones(n - 1)], [-1, 0, 1]).tocsr()
+    K2 = sps.diags(0.05 * main.astype(complex)).tocsr()
+    M0, D0 = sps.identity(n, format="csr"), 0.03 * sps.identity(n, format="csr")
+    f = np.zeros(n, dtype=complex)
+    f[[3, 40, 77]] = [1.0, -0.5j, 0.3]
+    system = rl.PeriodicSystem(0.9, M={0: M0}, D={0: D0}, K={0: K0, 2: K2}, f={1: f})
+    H = rl.HarmonicSet.full(9)
+    ref = rl.solve(system, H, method="direct", stability=False)
+    sol = rl.solve(system, H, method="gmres", backend=backend, stability=False, rtol=1e-12)
+    assert ref.success and sol.success, sol.message
+    assert sol.info["strategy"] == "full" and sol.info["backend"] == backend
+    assert _rel(sol.q, ref.q) < 1e-10

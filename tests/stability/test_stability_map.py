@@ -140,6 +140,9 @@ def test_gear_mesh_parametric_bands_against_mathieu(m: int) -> None:
     assert r.lower == pytest.approx(lo, rel=2e-5), (r.lower, lo)
     assert r.upper == pytest.approx(hi, rel=2e-5), (r.upper, hi)
     assert r.mechanism == "parametric mesh resonance"
+    # 2 w_0 ~ W_m is the principal resonance of the mesh; 2 w_0 ~ 2 W_m the secondary one
+    assert r.detail is not None and r.detail.sources == ("mesh mesh",)
+    assert r.detail.resonance == ("principal" if m == 1 else "secondary")
     # the free rotation (double zero exponent) keeps the stable speeds marginal, not unstable
     assert smap.marginal[smap.stable].all()
 

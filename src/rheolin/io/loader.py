@@ -193,6 +193,8 @@ class _Builder:
         for path, b in bodies:
             if b.name in self.nodes:
                 raise ModelError(f"{path}.name: a body named {b.name!r} already exists")
+            if isinstance(b, CondensedBody) and b.positions is None:
+                b.positions = self._file_positions(path, b)
             self.nodes[b.name] = len(b.positions) if hasattr(b, "positions") else 1
         if spec.model.input_body is not None:
             self._body(spec.model.input_body, "model.input_body")
@@ -223,6 +225,23 @@ class _Builder:
             self._call("model.gravity", self.model.set_gravity, spec.model.gravity)
         self._call("meshes", self.model.speed_plan)  # kinematic consistency of the gear train
         return self.model
+
+    def _file(self, path: str, b: CondensedBody) -> Path:
+        f = Path(b.path)
+        f = f if f.is_absolute() else self.base / f
+        if not f.is_file():
+            raise ModelError(f"{path}.path: no such file {str(f)!r}")
+        return f
+
+    def _file_positions(self, path: str, b: CondensedBody) -> list[list[float]]:
+        """Node positions stored in a condensed body's ``.npz`` (saved by ``condense``)."""
+        try:
+            with np.load(self._file(path, b)) as z:
+                if "positions" in z.files:
+                    return np.asarray(z["positions"], dtype=float).reshape(-1, 3).tolist()
+        except (OSError, ValueError) as exc:
+            raise ModelError(f"{path}.path: cannot read {b.path!r}: {exc}") from None
+        raise ModelError(f"{path}.positions: required (the file has no `positions`)")
 
     def _add_body(self, path: str, b: Any) -> None:
         ratio = None if b.speed_ratio is None else Fraction(b.speed_ratio)
@@ -255,10 +274,7 @@ class _Builder:
         elif isinstance(b, CondensedBody):
             if not b.positions or any(len(x) != 3 for x in b.positions):
                 raise ModelError(f"{path}.positions: give one 3-vector of lengths per node")
-            f = Path(b.path)
-            f = f if f.is_absolute() else self.base / f
-            if not f.is_file():
-                raise ModelError(f"{path}.path: no such file {str(f)!r}")
+            f = self._file(path, b)
             self.model.add_condensed_body(
                 b.name, b.positions, path=str(f), frame=b.frame, axis=b.axis, speed_ratio=ratio
             )

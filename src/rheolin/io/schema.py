@@ -223,10 +223,12 @@ class CondensedBody(_Body):
     """``Model.add_condensed_body`` from a matrix file, plus its disks and bearings.
 
     ``path``: a ``.npz`` with ``M``, ``K`` (optional ``D``, ``G``, ``frame``) in SI units, over
-    the nodes at ``positions`` (node-major, 6 DOF each); relative to the model file.
+    the nodes at ``positions`` (node-major, 6 DOF each); relative to the model file. A
+    Craig-Bampton body saved by ``rheolin.fe.CondensedFE.save`` (or ``rheolin condense``)
+    carries its ``positions`` and modal DOFs; ``positions`` may then be left out.
     """
 
-    positions: list[VecLength]
+    positions: list[VecLength] | None = None
     path: str
     frame: list[list[float]] | None = None
 

@@ -7,9 +7,8 @@ triplets per (matrix, harmonic) and returns SciPy CSR matrices. Never dense ``N 
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -17,15 +16,9 @@ import scipy.sparse as sp
 from ..errors import ModelError
 from ..system import PeriodicSystem
 from ._term import Term
-from .gears import gear_mesh_term, line_of_action
-from .joints import COMPONENTS, coupling_term
-from .loads import gravity_load, harmonic_force_term
-from .speeds import SpeedPlan, propagate_speeds, speed_plan
+from .speeds import SpeedPlan
 
-if TYPE_CHECKING:
-    from .model import Model
-
-__all__ = ["Assembled", "assemble_coefficients", "assemble_model", "assemble_system"]
+__all__ = ["Assembled", "assemble_coefficients", "assemble_system"]
 
 _Coefficients = tuple[
     dict[int, sp.csr_array], dict[int, sp.csr_array], dict[int, sp.csr_array], dict[int, np.ndarray]
@@ -151,120 +144,3 @@ class Assembled:
     def dofs(self, body: str, node: int) -> np.ndarray:
         """The six global DOFs of a node."""
         return 6 * self.node_index[(body, node)] + np.arange(6)
-
-
-def model_speed_plan(model: Model) -> SpeedPlan:
-    """Exact speed ratios, ``w1 / speed`` and integer harmonics of a :class:`Model`."""
-    if not model.bodies:
-        raise ModelError("the model has no bodies")
-    inp = model.input_body or next(iter(model.bodies))
-    if inp not in model.bodies:
-        raise ModelError(f"`input_body`: no body named {inp!r}; bodies: {list(model.bodies)}")
-    fixed = {n: b.speed_ratio for n, b in model.bodies.items() if b.speed_ratio is not None}
-    pairs = [m["pair"] for m in model.meshes.values()]
-    ratios = propagate_speeds(inp, pairs, model.bodies, fixed)
-    loads = [f["order"] * abs(ratios[f["reference"]]) for f in model.forces.values()]
-    return speed_plan(inp, pairs, model.bodies, loads, fixed)
-
-
-def assemble_model(model: Model, speed: float) -> Assembled:
-    """Assemble a :class:`Model` at input speed ``speed`` [rad/s]."""
-    plan = model_speed_plan(model)
-    w1 = float(plan.base) * speed
-    node_index: dict[tuple[str, int], int] = {}
-    labels: list[tuple[str, int, str]] = []
-    for b in model.bodies.values():
-        for i in range(len(b.positions)):
-            node_index[(b.name, i)] = len(node_index)
-            labels += [(b.name, i, c) for c in COMPONENTS]
-    dof = {key: 6 * v + np.arange(6) for key, v in node_index.items()}
-    terms: list[Term] = []
-    for b in model.bodies.values():
-        s = plan.spin[b.name]
-        if b.kind == "shaft":
-            terms += _shaft_terms(b, s, w1, node_index[(b.name, 0)])
-        elif b.kind == "condensed":
-            local = b.data["condensed"]
-            first = node_index[(b.name, 0)]
-            placed = replace(local, nodes=[first + i for i in local.nodes])
-            terms.append(placed.term(b.axis, s, w1))
-        for i, rn in b.disks.items():
-            terms.append(rn.term(node_index[(b.name, i)], b.axis, s, w1))
-    joints: dict[str, Term] = {}
-    for name, j in model.joints.items():
-        other = None if j["other"][0] is None else dof[j["other"]]
-        frame = j["frame"]
-        s = 0 if frame is None else plan.spin[frame]
-        axis = (0.0, 0.0, 1.0) if frame is None else model.bodies[frame].axis
-        joints[name] = coupling_term(
-            dof[(j["body"], j["node"])], other, j["K"], j["D"], spin=s, axis=axis, omega=w1
-        )
-    meshes: dict[str, tuple[Term, np.ndarray, int]] = {}
-    for (name, g), harmonic in zip(model.meshes.items(), plan.mesh, strict=True):
-        w = _mesh_vector(model, g, plan)
-        dof_a = dof[(g["pair"].pinion_body, g["pinion_node"])]
-        dof_b = dof[(g["pair"].gear_body, g["gear_node"])]
-        t = gear_mesh_term(
-            dof_a, dof_b, w, harmonic, g["stiffness"], g["damping"], g["transmission_error"]
-        )
-        meshes[name] = (t, w, harmonic)
-    for f in model.forces.values():
-        n = plan.harmonic(f["order"] * abs(plan.ratios[f["reference"]]))
-        terms.append(
-            harmonic_force_term(dof[(f["body"], f["node"])], f["force"], f["moment"], n, f["phase"])
-        )
-    all_terms = terms + list(joints.values()) + [m[0] for m in meshes.values()]
-    M, D, K, fl = assemble_coefficients(all_terms, 6 * len(node_index))
-    if model.gravity is not None:
-        for k, v in gravity_load(M, model.gravity, len(node_index)).items():
-            fl[k] = fl[k] + v if k in fl else v
-    system = PeriodicSystem(omega=w1, M=M, D=D, K=K, f=fl)
-    return Assembled(
-        system, w1, plan.base, speed, plan, plan.generators, labels, node_index, joints, meshes
-    )
-
-
-def _mesh_vector(model: Model, g: dict[str, Any], plan: SpeedPlan) -> np.ndarray:
-    """Line of action from normal module, pressure and helix angle and the node positions."""
-    p = g["pair"]
-    bp, bg = model.bodies[p.pinion_body], model.bodies[p.gear_body]
-    if abs(abs(bp.axis @ bg.axis) - 1) > 1e-9:
-        raise ModelError("gear mesh: pinion and gear axes must be parallel")
-    beta = g["helix_angle"]
-    alpha_t = np.arctan(np.tan(g["pressure_angle"]) / np.cos(beta))
-    mt = g["module"] / np.cos(beta)
-    rb1 = mt * p.pinion_teeth / 2 * np.cos(alpha_t)
-    rb2 = mt * p.gear_teeth / 2 * np.cos(alpha_t)
-    xa, xb, e = bp.positions[g["pinion_node"]], bg.positions[g["gear_node"]], bp.axis
-    dist = float(np.linalg.norm((xb - xa) - e * np.dot(xb - xa, e)))
-    alpha = alpha_t
-    if dist > 1e-12:
-        if dist <= rb1 + rb2:
-            raise ModelError(
-                f"gear mesh: centre distance {dist:.6g} m must exceed the sum of base radii "
-                f"{rb1 + rb2:.6g} m (check `module` and the tooth counts)"
-            )
-        alpha = float(np.arccos((rb1 + rb2) / dist))  # working transverse pressure angle
-    sign = int(np.sign(plan.spin[p.pinion_body])) or 1
-    return line_of_action(xa, xb, e, rb1, rb2, alpha, beta, sign * g["side"], g["center_direction"])
-
-
-def _shaft_terms(body: Any, s: int, w1: float, first_node: int) -> list[Term]:
-    """Timoshenko elements (M1's ``beam_term``) between consecutive nodes of a shaft body."""
-    from .beam import beam_term
-
-    data = body.data
-    return [
-        beam_term(
-            (first_node + i, first_node + i + 1),
-            float(length),
-            section,
-            data["material"],
-            body.axis,
-            body.axis,
-            s,
-            w1,
-            y_axis=data.get("y_axis"),
-        )
-        for i, (length, section) in enumerate(zip(data["lengths"], data["sections"], strict=True))
-    ]

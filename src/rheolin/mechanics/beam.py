@@ -30,12 +30,19 @@ from typing import Literal
 import numpy as np
 
 from ..errors import ModelError
-from ._term import Term
+from ._term import SpeedTerm, Term
 from .rigid import rigid_node_coefficients
 from .rotation import add_series, circulatory_matrix, clean_series, rotate_body_matrix, unit_axis
 from .sections import Material, Section
 
-__all__ = ["BeamMatrices", "beam_body_matrices", "beam_local_matrices", "beam_term", "local_axes"]
+__all__ = [
+    "BeamMatrices",
+    "beam_body_matrices",
+    "beam_local_matrices",
+    "beam_speed_term",
+    "beam_term",
+    "local_axes",
+]
 
 Rotary = Literal["auto", "consistent", "lumped"]
 _S = np.diag([1.0, -1.0, 1.0, -1.0])  # x-y plane pattern -> x-z plane (theta_y = -dw/dx)
@@ -246,27 +253,55 @@ def beam_term(
     if s != 0 and np.linalg.norm(np.cross(d, e)) > 1e-9:
         raise ModelError("a spinning beam's `direction` must be parallel to its spin `axis`")
     b = beam_body_matrices(length, section, material, d, y_axis, rotary)
-    W = s * float(w1)
     sign = float(np.sign(d @ e)) if s != 0 else 1.0
-    M = rotate_body_matrix(b.M, e, s)
-    K = add_series(rotate_body_matrix(b.K, e, s), circulatory_matrix(b.D, e, s, w1))
-    D = add_series(rotate_body_matrix(b.D, e, s), {0: sign * W * b.gyroscopic})
-    f: dict[int, np.ndarray] = {}
-    if b.node_inertia is not None:
-        Mr, Dr, Kr, fr = rigid_node_coefficients(0.0, b.node_inertia, np.zeros(3), e, s, w1)
-        for off in (0, 6):
-            for ser, add in ((M, Mr), (D, Dr), (K, Kr)):
-                for k, v in add.items():
-                    if k not in ser:
-                        ser[k] = np.zeros((12, 12), dtype=v.dtype)
-                    ser[k] = ser[k] + np.pad(v, ((off, 6 - off), (off, 6 - off)))
-            for k, v in fr.items():
-                f[k] = f.get(k, np.zeros(12, dtype=complex)) + np.pad(v, (off, 6 - off))
-    dofs = np.concatenate([6 * int(i) + np.arange(6), 6 * int(j) + np.arange(6)])
+    at = beam_speed_term((int(i), int(j)), b, e, s, sign).at(w1)
     return Term(
-        dofs=dofs,
-        M=clean_series(M),
-        D=clean_series(D),
-        K=clean_series(K),
-        f=clean_series(f) if f else {},
+        dofs=at.dofs,
+        M=clean_series(at.M),
+        D=clean_series(at.D),
+        K=clean_series(at.K),
+        f=clean_series(at.f) if at.f else {},
     )
+
+
+def _pad(series: dict[int, np.ndarray], off: int) -> dict[int, np.ndarray]:
+    """Rigid-node rows of one node (6x6 or 6) placed on node ``off // 6`` of the element."""
+    return {
+        k: np.pad(v, ((off, 6 - off), (off, 6 - off)) if v.ndim == 2 else (off, 6 - off))
+        for k, v in series.items()
+    }
+
+
+def beam_speed_term(
+    nodes: tuple[int, int], b: BeamMatrices, axis: np.ndarray, s: int, sign: float = 1.0
+) -> SpeedTerm:
+    """A beam element of :func:`beam_body_matrices` ``b`` between global ``nodes``, spinning
+    at ``s w1`` about the unit ``axis``, as a polynomial in ``w1`` (a :class:`SpeedTerm`).
+
+    Power 0: ``M``, ``Rt K_B Rt^T``, ``Rt D_B Rt^T``; power 1: the circulatory stiffness and
+    the gyroscopic terms; power 2: the lumped rotary inertia's centripetal rows. ``sign`` is
+    ``+1`` when the element points along ``axis``, ``-1`` against it. :func:`beam_term`
+    checks its arguments and evaluates this at ``w1``.
+
+    >>> from rheolin.mechanics.sections import Material, solid_circular
+    >>> Z = np.array([0.0, 0.0, 1.0])
+    >>> b = beam_body_matrices(0.1, solid_circular(0.02), Material(2e11, 7800.0, nu=0.3), Z)
+    >>> t = beam_speed_term((0, 1), b, Z, 1)
+    >>> sorted(t.M), sorted(t.D), sorted(t.K)
+    ([0], [0, 1], [0, 1])
+    """
+    e = axis
+    M = {0: rotate_body_matrix(b.M, e, s)}
+    K = {0: rotate_body_matrix(b.K, e, s), 1: circulatory_matrix(b.D, e, s, 1.0)}
+    D = {0: rotate_body_matrix(b.D, e, s), 1: {0: sign * s * b.gyroscopic}}
+    f: dict[int, dict[int, np.ndarray]] = {}
+    if b.node_inertia is not None:
+        Mr, Dr, Kr, fr = rigid_node_coefficients(0.0, b.node_inertia, np.zeros(3), e, s, 1.0)
+        for off in (0, 6):
+            M[0] = add_series(M[0], _pad(Mr, off))
+            D[1] = add_series(D[1], _pad(Dr, off))
+            K[2] = add_series(K.get(2, {}), _pad(Kr, off))
+            f[2] = add_series(f.get(2, {}), _pad(fr, off))
+    i, j = nodes
+    dofs = np.concatenate([6 * i + np.arange(6), 6 * j + np.arange(6)])
+    return SpeedTerm(dofs=dofs, M=M, D=D, K=K, f=f)

@@ -11,6 +11,19 @@ section 5)::
 ``G_B`` is the gyroscopic matrix per unit spin speed about ``+axis``. Inertia terms of a
 non-axisymmetric rotary inertia beyond ``G_B`` (the ``J'`` rows of a rigid node) are not
 generated; model such inertia with :class:`~rheolin.mechanics.rigid.RigidNode`.
+
+Craig-Bampton bodies (:func:`rheolin.fe.condense`) add ``n_modes`` modal DOFs after the node
+DOFs (global indices ``modal_dofs``). Modal amplitudes are body-frame scalars, so ``Rx`` rotates
+the nodes' 3-vectors and leaves them alone. Such a body spins with its exact body-frame
+inertia (``G_B`` the Coriolis matrix per unit speed, ``C_B`` the centrifugal matrix per unit
+speed squared, both from the FE mass): with ``x_B = Rx^T x`` the body-frame equations
+``M x_B'' + (D + W G) x_B' + (K + W^2 C) x_B = f_B`` become
+
+    M += Rx M_B Rx^T,
+    D += Rx D_B Rx^T + 2 Rx M_B Rx'^T + W Rx G_B Rx^T,
+    K += Rx K_B Rx^T + Rx D_B Rx'^T + Rx M_B Rx''^T + W Rx G_B Rx'^T + W^2 Rx C_B Rx^T
+
+(for a body of translational masses the Coriolis and ``Rx'`` terms cancel, as for beams).
 """
 
 from __future__ import annotations
@@ -18,14 +31,24 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import scipy.io
+import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..errors import ModelError
-from ._term import Term
-from .rotation import add_series, circulatory_matrix, clean_series, rotate_body_matrix, unit_axis
+from ._term import SpeedTerm, Term
+from .rotation import (
+    add_series,
+    circulatory_matrix,
+    clean_series,
+    derivative,
+    rotate_body_matrix,
+    rotation_series,
+    unit_axis,
+)
 
 __all__ = ["CondensedBody", "load_condensed", "load_matrix"]
 
@@ -81,6 +104,9 @@ class CondensedBody:
     D: np.ndarray | None = None
     G: np.ndarray | None = None
     frame: np.ndarray | None = None
+    n_modes: int = 0
+    C: np.ndarray | None = None
+    modal_dofs: Sequence[int] = ()
 
     def __post_init__(self) -> None:
         nodes = np.asarray(self.nodes)
@@ -88,16 +114,16 @@ class CondensedBody:
             raise ModelError(f"`nodes` must be a nonempty list of integers, got {self.nodes!r}")
         if nodes.min() < 0 or len(set(nodes.tolist())) != nodes.size:
             raise ModelError("`nodes` must be distinct nonnegative node indices")
-        n = 6 * nodes.size
-        for name in ("M", "K", "D", "G"):
+        n = 6 * nodes.size + int(self.n_modes)
+        for name in ("M", "K", "D", "G", "C"):
             x = getattr(self, name)
             if x is None:
                 continue
             x = x.toarray() if sp.issparse(x) else np.asarray(x, dtype=float)
             if x.shape != (n, n) or not np.all(np.isfinite(x)):
                 raise ModelError(
-                    f"`{name}` must be a finite {n}x{n} matrix (6 DOFs x {nodes.size} nodes), "
-                    f"got shape {x.shape}"
+                    f"`{name}` must be a finite {n}x{n} matrix (6 DOFs x {nodes.size} nodes "
+                    f"+ {self.n_modes} modes), got shape {x.shape}"
                 )
             object.__setattr__(self, name, x)
         T = np.eye(3) if self.frame is None else np.asarray(self.frame, dtype=float)
@@ -110,30 +136,114 @@ class CondensedBody:
 
     @property
     def dofs(self) -> np.ndarray:
-        """Global DOF indices, node-major."""
-        return (6 * np.asarray(self.nodes)[:, None] + np.arange(6)).ravel()
+        """Global DOF indices, node-major, then the modal DOFs."""
+        nodal = (6 * np.asarray(self.nodes)[:, None] + np.arange(6)).ravel()
+        if not self.n_modes:
+            return nodal
+        modal = np.asarray(self.modal_dofs, dtype=np.int64).ravel()
+        if modal.size != self.n_modes:
+            raise ModelError(f"`modal_dofs` must hold {self.n_modes} global DOF indices")
+        return np.concatenate([nodal, modal])
 
     def _global(self, x: np.ndarray) -> np.ndarray:
         frame = np.asarray(self.frame, dtype=float)
-        Tb: np.ndarray = np.kron(np.eye(2 * len(self.nodes)), frame)
+        Tb: np.ndarray = sla.block_diag(
+            np.kron(np.eye(2 * len(self.nodes)), frame), np.eye(self.n_modes)
+        )
         return Tb @ x @ Tb.T
+
+    def _modal_speed_term(self, e: np.ndarray, s: int) -> SpeedTerm:
+        """The exact body-frame inertia formula of the module docstring (modal bodies)."""
+        glob: dict[str, Any] = {
+            n: None if getattr(self, n) is None else self._global(getattr(self, n))
+            for n in ("M", "K", "D", "G", "C")
+        }
+        if s == 0:
+            D0 = {} if glob["D"] is None else {0: {0: glob["D"]}}
+            return SpeedTerm(dofs=self.dofs, M={0: {0: glob["M"]}}, D=D0, K={0: {0: glob["K"]}})
+        if glob["G"] is None or glob["C"] is None:
+            raise ModelError(
+                "a condensed body with modes spins only with its Coriolis and centrifugal "
+                "matrices: condense it with `spin_axis`"
+            )
+        nb = 6 * len(self.nodes)
+        R = {
+            k: sla.block_diag(np.kron(np.eye(nb // 3), P), np.eye(self.n_modes) * (k == 0))
+            for k, P in rotation_series(e, s).items()
+        }
+        dR = derivative(R, 1.0)
+        ddR = derivative(R, 1.0, 2)
+
+        def sandwich(A: dict, X: np.ndarray, B: dict) -> dict[int, np.ndarray]:
+            out: dict[int, np.ndarray] = {}
+            for ka, Pa in A.items():
+                left = Pa @ X
+                for kb, Pb in B.items():
+                    out[ka + kb] = out.get(ka + kb, 0) + left @ Pb.T
+            return clean_series(out)
+
+        M, G, C = glob["M"], glob["G"], glob["C"]
+        D: dict[int, dict[int, np.ndarray]] = {
+            1: add_series(
+                {k: 2 * v for k, v in sandwich(R, M, dR).items()},
+                {k: s * v for k, v in sandwich(R, G, R).items()},
+            )
+        }
+        K = {
+            0: sandwich(R, glob["K"], R),
+            2: add_series(
+                sandwich(R, M, ddR),
+                {k: s * v for k, v in sandwich(R, G, dR).items()},
+                {k: s * s * v for k, v in sandwich(R, C, R).items()},
+            ),
+        }
+        if glob["D"] is not None:
+            D[0] = sandwich(R, glob["D"], R)
+            K[1] = sandwich(R, glob["D"], dR)
+        return SpeedTerm(dofs=self.dofs, M={0: sandwich(R, M, R)}, D=D, K=K)
 
     def term(self, axis: object, s: int, w1: float) -> Term:
         """:class:`Term` of the body spinning at ``W = s * w1`` about ``axis``."""
+        t = self.speed_term(axis, s).at(w1)
+        return Term(dofs=t.dofs, M=t.M, D=clean_series(t.D) if t.D else {}, K=clean_series(t.K))
+
+    def speed_term(self, axis: object, s: int) -> SpeedTerm:
+        """:meth:`term` as a polynomial in ``w1``: the circulatory stiffness ``Rt D_B Rt'^T``
+        and the gyroscopic damping ``W G`` are its linear part."""
         e = unit_axis(axis)
-        W = s * float(w1)
+        if self.n_modes or self.C is not None:
+            return self._modal_speed_term(e, s)
         M = rotate_body_matrix(self._global(self.M), e, s)
-        K = rotate_body_matrix(self._global(self.K), e, s)
-        D: dict[int, np.ndarray] = {}
+        K = {0: rotate_body_matrix(self._global(self.K), e, s)}
+        D: dict[int, dict[int, np.ndarray]] = {}
         if self.D is not None:
             Dg = self._global(self.D)
-            D = rotate_body_matrix(Dg, e, s)
-            K = add_series(K, circulatory_matrix(Dg, e, s, w1))
-        if self.G is not None and W != 0.0:
-            D = add_series(
-                D, {k: W * v for k, v in rotate_body_matrix(self._global(self.G), e, s).items()}
-            )
-        return Term(dofs=self.dofs, M=M, D=clean_series(D) if D else {}, K=clean_series(K))
+            D[0] = rotate_body_matrix(Dg, e, s)
+            K[1] = circulatory_matrix(Dg, e, s, 1.0)
+        if self.G is not None and s != 0:
+            G = rotate_body_matrix(self._global(self.G), e, s)
+            D[1] = {k: s * v for k, v in G.items()}
+        return SpeedTerm(dofs=self.dofs, M={0: M}, D=D, K=K)
+
+
+#: Arrays of a condensed-body ``.npz`` (those written by :meth:`rheolin.fe.CondensedFE.save`).
+_NPZ_KEYS = {
+    "M",
+    "K",
+    "D",
+    "G",
+    "C",
+    "nodes",
+    "frame",
+    "positions",
+    "n_modes",
+    "interface",
+    "frequencies",
+    "rigid_body_modes",
+    "spin_axis",
+    "recovery",
+    "recovery_dofs",
+}
 
 
 def load_condensed(
@@ -164,11 +274,13 @@ def load_condensed(
             raise ModelError(f"`path` must be a .npz file, got {str(p)!r}")
         with np.load(p) as z:
             data = {k: z[k] for k in z.files}
-        unknown = set(data) - {"M", "K", "D", "G", "nodes", "frame"}
+        unknown = set(data) - _NPZ_KEYS
         if unknown:
             raise ModelError(
-                f"unknown arrays {sorted(unknown)} in {str(p)!r}; allowed: M, K, D, G, nodes, frame"
+                f"unknown arrays {sorted(unknown)} in {str(p)!r}; allowed: {sorted(_NPZ_KEYS)}"
             )
+        if "nodes" not in data and "positions" in data:
+            data["nodes"] = np.arange(len(np.asarray(data["positions"])))
     for name, f in (("M", M), ("K", K), ("D", D), ("G", G)):
         if f is not None:
             data[name] = load_matrix(f)
@@ -180,6 +292,8 @@ def load_condensed(
         if name not in data:
             raise ModelError(f"condensed body needs `{name}`")
     return CondensedBody(
+        n_modes=int(np.asarray(data.get("n_modes", 0))),
+        C=data.get("C"),  # type: ignore[arg-type]
         M=data["M"],  # type: ignore[arg-type]
         K=data["K"],  # type: ignore[arg-type]
         nodes=np.asarray(data["nodes"]).ravel().tolist(),

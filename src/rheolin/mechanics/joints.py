@@ -18,11 +18,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import ModelError
-from ._term import Term
+from ._term import SpeedTerm, Term
 from .rotation import circulatory_matrix, rotate_body_matrix
 
 __all__ = [
     "COMPONENTS",
+    "coupling_speed_term",
     "coupling_term",
     "expand_matrix",
     "joint_term",
@@ -144,18 +145,40 @@ def coupling_term(
     >>> sorted(t.K), complex(np.round(t.K[2][0, 0], 12))
     ([-2, 0, 2], (0.5+0j))
     """
+    return coupling_speed_term((dofs_a, dofs_b), stiffness, damping, spin, axis).at(omega)
+
+
+def coupling_speed_term(
+    nodes: tuple[ArrayLike, ArrayLike | None],
+    stiffness: np.ndarray | None,
+    damping: np.ndarray | None,
+    spin: int = 0,
+    axis: ArrayLike = (0.0, 0.0, 1.0),
+) -> SpeedTerm:
+    """:func:`coupling_term` as a polynomial in ``w1``: the circulatory stiffness of the
+    rotating damping ``Rt C Rt'^T`` is its linear part, the rest is constant.
+
+    ``nodes`` holds the DOFs of both nodes (``None``: ground).
+
+    >>> t = coupling_speed_term((range(6), None), None, expand_matrix(2.0, ["ux", "uy"]), spin=1)
+    >>> sorted(t.K), t.K[1][0][:2, :2] + 0.0
+    ([1], array([[ 0.,  2.], [-2.,  0.]]))
+    """
+    dofs_a, dofs_b = nodes
     if isinstance(spin, bool) or not isinstance(spin, int | np.integer):
         raise ModelError(f"`spin` must be an integer harmonic, got {spin!r}")
-    K: dict[int, np.ndarray] = {}
-    D: dict[int, np.ndarray] = {}
+    K: dict[int, dict[int, np.ndarray]] = {}
+    D: dict[int, dict[int, np.ndarray]] = {}
     s = int(spin)
     if stiffness is not None:
-        K = rotate_body_matrix(np.asarray(stiffness, float), axis, s)
+        K[0] = rotate_body_matrix(np.asarray(stiffness, float), axis, s)
     if damping is not None:
         C = np.asarray(damping, float)
-        D = rotate_body_matrix(C, axis, s)
-        for k, v in circulatory_matrix(C, axis, s, omega).items():
-            K[k] = K[k] + v if k in K else v
-    dofs, K = _pair(dofs_a, dofs_b, K)
-    _, D = _pair(dofs_a, dofs_b, D)
-    return Term(dofs, K=K, D=D)
+        D[0] = rotate_body_matrix(C, axis, s)
+        if s != 0:
+            K[1] = circulatory_matrix(C, axis, s, 1.0)
+    dofs, _ = _pair(dofs_a, dofs_b, {})
+    for X in (K, D):
+        for p in X:
+            X[p] = _pair(dofs_a, dofs_b, X[p])[1]
+    return SpeedTerm(dofs, K=K, D=D)

@@ -47,6 +47,8 @@ def gravity_load(
     field = np.tile(np.concatenate([g, np.zeros(3)]), n_nodes)
     out: dict[int, np.ndarray] = {}
     for k, Mk in M.items():
+        if Mk.shape[1] > field.size:  # modal DOFs (condensed bodies) after the nodes: 0
+            field = np.concatenate([field, np.zeros(Mk.shape[1] - field.size)])
         v = Mk @ field
         v = np.real(v) if k == 0 else np.asarray(v, dtype=complex)
         if np.any(v != 0):

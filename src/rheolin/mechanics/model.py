@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ModelError
-from .assembly import Assembled, assemble_model, model_speed_plan
+from .assembly import Assembled
 from .condensed import CondensedBody, load_condensed
 from .gears import rectangular_wave_coefficients
 from .joints import expand_matrix
@@ -38,6 +38,7 @@ from .rigid import couple_unbalance as _add_couple
 from .rotation import unit_axis
 from .sections import Material, Section, hollow_circular, solid_circular
 from .speeds import GearPair, SpeedPlan
+from .template import SpeedTemplate, assemble_model, model_speed_plan
 
 __all__ = ["Assembled", "Model"]
 
@@ -171,7 +172,7 @@ class Model:
     def add_condensed_body(
         self,
         name: str,
-        positions: Sequence[Sequence[float]] | np.ndarray,
+        positions: Sequence[Sequence[float]] | np.ndarray | None = None,
         M: Any = None,
         K: Any = None,
         D: Any = None,
@@ -180,8 +181,13 @@ class Model:
         path: str | None = None,
         axis: Sequence[float] = (0.0, 0.0, 1.0),
         speed_ratio: Fraction | int | None = None,
+        body: Any = None,
     ) -> None:
         """A body given by condensed matrices in body axes (e.g. from an FE reduction).
+
+        ``body``: a :class:`rheolin.fe.CondensedFE` (Craig-Bampton, :func:`rheolin.fe.condense`)
+        whose interface nodes become the body's nodes (``positions`` default to its reference
+        points) and whose modes become extra DOFs; a ``.npz`` it saved works as ``path``.
 
         ``M``, ``K`` (and optional rotating damping ``D``, gyroscopic matrix per unit speed
         ``G``) are ``6 n x 6 n`` over the body's ``n`` nodes at ``positions`` (node-major,
@@ -196,20 +202,38 @@ class Model:
         'condensed'
         """
         self._new_body(name)
+        if body is not None:
+            if path is not None or M is not None:
+                raise ModelError("give one of `body`, `path` or the matrices `M`, `K`")
+            M, K, D, G = body.M, body.K, body.D, body.G
+        if positions is None:
+            if body is not None:
+                positions = body.positions
+            elif path is not None:
+                with np.load(path) as z:
+                    if "positions" not in z.files:
+                        raise ModelError("`positions`: required (the file has no `positions`)")
+                    positions = z["positions"]
+            else:
+                raise ModelError("`positions`: give one 3-vector per node")
         pts = np.asarray(positions, dtype=float).reshape(-1, 3)
         nodes = list(range(len(pts)))  # body-local; the assembly maps them to global nodes
         axes = None if frame is None else np.asarray(frame, dtype=float)
-        if path is not None:
+        if body is not None:
+            cb = CondensedBody(
+                M=M, K=K, nodes=nodes, D=D, G=G, frame=axes, n_modes=body.n_modes, C=body.C
+            )
+        elif path is not None:
             if M is not None or K is not None:
                 raise ModelError("give either `path` or the matrices `M`, `K`, not both")
-            body = load_condensed(path, nodes=nodes, frame=axes)
+            cb = load_condensed(path, nodes=nodes, frame=axes)
         else:
             if M is None or K is None:
                 raise ModelError("a condensed body needs `M` and `K` (or a `path`)")
-            body = CondensedBody(M=M, K=K, nodes=nodes, D=D, G=G, frame=axes)
+            cb = CondensedBody(M=M, K=K, nodes=nodes, D=D, G=G, frame=axes)
         ratio = None if speed_ratio is None else Fraction(speed_ratio)
         e = unit_axis(axis, "axis")
-        self.bodies[name] = _Body(name, "condensed", e, pts, ratio, {"condensed": body})
+        self.bodies[name] = _Body(name, "condensed", e, pts, ratio, {"condensed": cb})
 
     def add_disk(
         self,
@@ -403,6 +427,12 @@ class Model:
     def assemble(self, speed: float) -> Assembled:
         """Assemble at input speed ``speed`` [rad/s] (> 0); see :class:`Assembled`."""
         return assemble_model(self, _positive(speed, "speed"))
+
+    def speed_template(self) -> SpeedTemplate:
+        """The model assembled once for many speeds (:class:`SpeedTemplate`): its
+        ``assemble(speed)`` only scales the speed-dependent coefficients. Make a new one after
+        changing the model."""
+        return SpeedTemplate(self)
 
     def _body(self, name: str, field_name: str) -> _Body:
         if name not in self.bodies:

@@ -15,7 +15,14 @@ import numpy as np
 from ..solution import Solution
 from .assembly import Assembled
 
-__all__ = ["HarmonicRow", "bearing_forces", "node_displacements", "transmission_errors"]
+__all__ = [
+    "HarmonicRow",
+    "bearing_force_array",
+    "bearing_forces",
+    "node_displacements",
+    "transmission_error_array",
+    "transmission_errors",
+]
 
 
 @dataclass(frozen=True)
@@ -28,9 +35,20 @@ class HarmonicRow:
     value: np.ndarray
 
 
-def _row(a: Assembled, n: int, value: np.ndarray) -> HarmonicRow:
-    orders = {b: float(n / abs(s)) for b, s in a.plan.spin.items() if s != 0}
-    return HarmonicRow(int(n), float(n * a.omega / (2 * np.pi)), orders, value)
+def _rows(a: Assembled, harmonics: np.ndarray, values: np.ndarray) -> list[HarmonicRow]:
+    spins = [(b, abs(s)) for b, s in a.plan.spin.items() if s != 0]
+    return [
+        HarmonicRow(
+            int(n), float(n * a.omega / (2 * np.pi)), {b: float(n / s) for b, s in spins}, v
+        )
+        for n, v in zip(harmonics.tolist(), values, strict=True)
+    ]
+
+
+def _half(sol: Solution, dofs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The harmonics ``n >= 0`` of the solution and ``q_n`` on ``dofs`` (one row each)."""
+    keep = sol.harmonics >= 0
+    return sol.harmonics[keep], sol.q[keep][:, dofs]
 
 
 def node_displacements(sol: Solution, a: Assembled, body: str, node: int) -> list[HarmonicRow]:
@@ -49,8 +67,35 @@ def node_displacements(sol: Solution, a: Assembled, body: str, node: int) -> lis
     >>> rows[0].harmonic, round(rows[0].frequency_hz, 3), rows[0].orders
     (1, 15.915, {'r': 1.0})
     """
-    dofs = a.dofs(body, node)
-    return [_row(a, n, sol.harmonic(n)[dofs]) for n in sol.harmonics if n >= 0]
+    return _rows(a, *_half(sol, a.dofs(body, node)))
+
+
+def bearing_force_array(sol: Solution, a: Assembled, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`bearing_forces` as arrays: the harmonics ``m >= 0`` and ``F_m`` (shape (., 6)).
+
+    One product per coefficient harmonic ``k`` of the joint over every ``m`` at once.
+    """
+    term = a.joints[name]
+    H = sol.harmonics
+    pos = H >= 0
+    Q = sol.q[:, term.dofs]
+    F = np.zeros((int(pos.sum()), term.dofs.size), dtype=complex)
+    m = H[pos]
+    for k in set(term.K) | set(term.D):
+        n = m - k
+        j = np.clip(np.searchsorted(H, n), 0, H.size - 1)
+        hit = H[j] == n
+        if not hit.any():
+            continue
+        Qn = Q[j[hit]]
+        acc = np.zeros((Qn.shape[0], term.dofs.size), dtype=complex)
+        if k in term.K:
+            acc += Qn @ np.asarray(term.K[k]).T
+        if k in term.D:
+            s = 1j * a.omega * n[hit].astype(float)
+            acc += s[:, None] * (Qn @ np.asarray(term.D[k]).T)
+        F[hit] += acc
+    return m, F[:, :6]
 
 
 def bearing_forces(sol: Solution, a: Assembled, name: str) -> list[HarmonicRow]:
@@ -59,26 +104,19 @@ def bearing_forces(sol: Solution, a: Assembled, name: str) -> list[HarmonicRow]:
     ``F_m = sum_n (K_{m-n} + i n w1 D_{m-n}) q_n`` on the joint's DOFs (first six rows: the
     force on the support of node a, i.e. minus the force on the node).
     """
-    term = a.joints[name]
-    q = {int(n): sol.harmonic(n)[term.dofs] for n in sol.harmonics}
-    rows = []
-    for m in sol.harmonics:
-        if m < 0:
-            continue
-        F = np.zeros(term.dofs.size, dtype=complex)
-        for n, qn in q.items():
-            k = int(m - n)
-            if k in term.K:
-                F += term.K[k] @ qn
-            if k in term.D:
-                F += 1j * n * a.omega * (term.D[k] @ qn)
-        rows.append(_row(a, int(m), F[:6]))
-    return rows
+    return _rows(a, *bearing_force_array(sol, a, name))
+
+
+def transmission_error_array(
+    sol: Solution, a: Assembled, name: str
+) -> tuple[np.ndarray, np.ndarray]:
+    """The harmonics ``n >= 0`` and ``delta_n = w^T q_n`` [m] of mesh ``name``."""
+    term, w, _ = a.meshes[name]
+    n, Q = _half(sol, term.dofs)
+    return n, Q @ w
 
 
 def transmission_errors(sol: Solution, a: Assembled, name: str) -> list[HarmonicRow]:
     """Dynamic transmission error ``delta = w^T q`` [m] of mesh ``name`` (line of action)."""
-    term, w, _ = a.meshes[name]
-    return [
-        _row(a, n, np.atleast_1d(w @ sol.harmonic(n)[term.dofs])) for n in sol.harmonics if n >= 0
-    ]
+    n, delta = transmission_error_array(sol, a, name)
+    return _rows(a, n, delta[:, None])

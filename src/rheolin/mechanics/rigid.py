@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ModelError
-from ._term import Term
+from ._term import SpeedTerm, Term
 from .rotation import clean_series, derivative, rotation_series, series_product, skew, unit_axis
 
 __all__ = [
@@ -103,10 +103,21 @@ class RigidNode:
         >>> t.dofs.tolist(), t.D[0][3:5, 3:5] + 0.0
         ([18, 19, 20, 21, 22, 23], array([[ 0., 20.], [-20., 0.]]))
         """
+        return self.speed_term(node, axis, s).at(w1)
+
+    def speed_term(self, node: int, axis: object, s: int) -> SpeedTerm:
+        """:meth:`term` as a polynomial in ``w1``: ``M`` is constant, ``D`` linear, ``K``
+        and ``f`` quadratic (each homogeneous, so the coefficients at ``w1 = 1`` are exact).
+
+        >>> t = RigidNode(1.0, [1.0, 1.0, 2.0]).speed_term(0, [0, 0, 1], 1)
+        >>> sorted(t.M), sorted(t.D), sorted(t.K), sorted(t.f)
+        ([0], [1], [2], [2])
+        """
         if isinstance(node, bool) or not isinstance(node, (int, np.integer)) or node < 0:
             raise ModelError(f"`node` must be a nonnegative integer, got {node!r}")
-        M, D, K, f = self.coefficients(axis, s, w1)
-        return Term(dofs=6 * int(node) + np.arange(6), M=M, D=D, K=K, f=f)
+        M, D, K, f = self.coefficients(axis, s, 1.0)
+        dofs = 6 * int(node) + np.arange(6)
+        return SpeedTerm(dofs=dofs, M={0: M}, D={1: D}, K={2: K}, f={2: f})
 
 
 def _add(*series: Series) -> Series:

@@ -16,7 +16,9 @@ HZ = 1.0 / (2.0 * np.pi)  # rad/s -> Hz
 _COLORS = {"forward": "tab:blue", "backward": "tab:red", "mixed": "tab:purple", "none": "0.45"}
 
 
-def plot_campbell(result: Any, path: str | Path, fmax_hz: float | None = None) -> Path:
+def plot_campbell(
+    result: Any, path: str | Path, fmax_hz: float | None = None, stability: Any = None
+) -> Path:
     """Campbell diagram as a PNG.
 
     Top: damped natural frequencies [Hz] against input speed [rpm], one marker per mode and
@@ -36,6 +38,9 @@ def plot_campbell(result: Any, path: str | Path, fmax_hz: float | None = None) -
         speed (at least up to the two lowest branches), so that the crossings are readable
         and far, speed-independent modes (axial, torsional, housing) do not flatten them.
         The damping panel shows the branches below this limit.
+    stability
+        A :class:`~rheolin.stability.StabilityMap` over the same speeds: its unstable ranges
+        (of the full time-periodic system, Floquet) are shaded in both panels and labelled.
 
     Examples
     --------
@@ -91,9 +96,28 @@ def plot_campbell(result: Any, path: str | Path, fmax_hz: float | None = None) -
         ax.plot(c.speed * RPM, c.frequency * HZ, "o", ms=9, mfc=face, mec="k", mew=1.0, alpha=0.8)
     ax.set_ylim(0.0, fmax)
     ax.set_xlim(rpm[0], rpm[-1])
+    if stability is not None:
+        for r in stability.ranges:
+            for a in (ax, axd):
+                a.axvspan(r.lower * RPM, r.upper * RPM, color="tab:red", alpha=0.12, lw=0)
+            ax.annotate(
+                f"unstable (Floquet): {r.label}"[:90],
+                (0.5 * (r.lower + r.upper) * RPM, 0.97 * fmax),
+                ha="center",
+                va="top",
+                fontsize=7,
+                color="tab:red",
+            )
     ax.set_xlabel("input speed [rpm]")
     ax.set_ylabel("damped natural frequency [Hz]")
-    ax.set_title("Campbell diagram (time-averaged system); circles: critical speeds")
+    title = "Campbell diagram (time-averaged system); circles: critical speeds"
+    if stability is not None:
+        title += "\n" + (
+            f"Floquet: {len(stability.ranges)} unstable range(s) shaded"
+            if stability.ranges
+            else "Floquet: stable at every speed"
+        )
+    ax.set_title(title)
     ax.grid(alpha=0.3)
     if shown:
         ax.legend(fontsize=8, loc="upper left")

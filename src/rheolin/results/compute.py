@@ -13,6 +13,7 @@ from typing import Any
 from ..harmonics import HarmonicSet, TruncationWarning
 from ..mechanics.assembly import Assembled
 from ..mechanics.model import Model
+from ..mechanics.template import SpeedTemplate
 from ..solution import Solution
 from ..solvers import solve
 
@@ -76,8 +77,15 @@ def solve_point(
     rtol: float = 1e-10,
     stability: bool | None = None,
     callback: Any = None,
+    template: SpeedTemplate | None = None,
+    x0: Any = None,
+    backend: str = "auto",
 ) -> OperatingPoint:
     """Assemble ``model`` at input ``speed`` [rad/s] and solve for the periodic steady state.
+
+    ``template`` (``model.speed_template()``) skips re-reading the model at every speed of a
+    sweep; ``x0`` (e.g. the solution at the previous speed) starts the iterative solver;
+    ``backend`` is passed to :func:`rheolin.solve`.
 
     ``stability=None`` checks Floquet stability whenever it fits the memory budget (as
     :func:`rheolin.solve`).
@@ -89,9 +97,23 @@ def solve_point(
     (True, None)
     """
     t0 = time.perf_counter()
-    a = model.assemble(speed)
+    a = (template or model.speed_template()).assemble(speed)
     hset = harmonic_set(a, order, max_order)
-    sol = solve(a.system, hset, method=method, rtol=rtol, callback=callback, stability=stability)
+    sol = solve(
+        a.system,
+        hset,
+        method=method,
+        rtol=rtol,
+        callback=callback,
+        stability=stability,
+        x0=x0,
+        backend=backend,
+    )
+    res = sol.floquet
+    if res is not None and not res.stable and res.method == "lattice":
+        from ..stability.mechanism import identify
+
+        sol.info["stability_mechanism"] = identify(model, a, res).label
     settings = dict(method=method, order=order, max_order=max_order, rtol=rtol)
     positions = {(b.name, i): x for b in model.bodies.values() for i, x in enumerate(b.positions)}
     return OperatingPoint(a, hset, sol, time.perf_counter() - t0, settings, positions)

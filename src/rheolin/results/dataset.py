@@ -21,11 +21,13 @@ from .. import __version__
 from ..io.atomic import atomic_write
 from ..mechanics.assembly import Assembled
 from ..mechanics.joints import COMPONENTS
-from ..mechanics.outputs import bearing_forces, transmission_errors
+from ..mechanics.outputs import bearing_force_array, transmission_error_array
+from ..solution import Solution
 from .compute import OperatingPoint
 
 __all__ = [
     "complex_values",
+    "floquet_attrs",
     "frequency_markers",
     "netcdf_engine",
     "point_dataset",
@@ -35,6 +37,27 @@ __all__ = [
 
 _UNITS = {"ux": "m", "uy": "m", "uz": "m", "phix": "rad", "phiy": "rad", "phiz": "rad"}
 _FORCE_UNITS = {"Fx": "N", "Fy": "N", "Fz": "N", "Mx": "N m", "My": "N m", "Mz": "N m"}
+
+
+def floquet_attrs(sol: Solution) -> dict[str, Any]:
+    """The stability check's details as NetCDF attributes (empty when not checked)."""
+    res = sol.floquet
+    if res is None:
+        return {}
+    lead = res.leading
+    out: dict[str, Any] = {
+        "stability_decided": int(res.decided),
+        "floquet_method": res.method,
+        "leading_exponent_real": float(lead.real),
+        "leading_exponent_frequency_hz": float(abs(lead.imag) / (2 * math.pi)),
+        "floquet_seconds": float(res.info.get("seconds", float("nan"))),
+    }
+    if res.lattice is not None:
+        out["floquet_lattice_order"] = int(res.lattice.order)
+        out["floquet_lattice_size"] = len(res.lattice)
+    if "stability_mechanism" in sol.info:
+        out["stability_mechanism"] = str(sol.info["stability_mechanism"])
+    return out
 
 
 def stability_text(stable: bool | None) -> str:
@@ -99,7 +122,7 @@ def point_dataset(
     }
     names = list(a.joints)
     if names:
-        F = np.array([[r.value for r in bearing_forces(sol, a, j)] for j in names])
+        F = np.array([bearing_force_array(sol, a, j)[1] for j in names])
         coords["bearing"] = ("bearing", names)
         data["bearing_force"] = (
             ("bearing", "harmonic", "force_component", "part"),
@@ -108,7 +131,7 @@ def point_dataset(
         )
     meshes = list(a.meshes)
     if meshes:
-        E = np.array([[r.value[0] for r in transmission_errors(sol, a, m)] for m in meshes])
+        E = np.array([transmission_error_array(sol, a, m)[1] for m in meshes])
         coords["mesh"] = ("mesh", meshes)
         data["dte"] = (
             ("mesh", "harmonic", "part"),
@@ -140,6 +163,7 @@ def point_dataset(
             "max_floquet_real": float("nan")
             if sol.max_floquet_real is None
             else float(sol.max_floquet_real),
+            **floquet_attrs(sol),
             "harmonic_count": len(sol.harmonics),
             "closure_order": int(point.settings.get("order", 0)),
             "max_order": float(point.settings.get("max_order") or 0.0),

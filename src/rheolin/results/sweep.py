@@ -48,6 +48,10 @@ def sweep_speeds(
 ) -> xr.Dataset:
     """Solve at every input speed [rad/s] and collect amplitude spectra (see :func:`solve_point`).
 
+    The model is assembled once (:class:`~rheolin.mechanics.template.SpeedTemplate`), and each
+    speed starts from the converged solution of the previous one when both share the harmonic
+    set (a warm start: fewer iterations, same tolerance).
+
     >>> from rheolin.io import load_model
     >>> from rheolin.data import example_path
     >>> ds = sweep_speeds(load_model(example_path("rotor")), [100.0, 200.0], stability=False)
@@ -55,9 +59,13 @@ def sweep_speeds(
     (('speed', 'harmonic', 'node'), [1, 1])
     """
     points = []
+    template = model.speed_template()
+    previous = None
     for i, w in enumerate(speeds):
-        p = solve_point(model, float(w), **options)
+        p = solve_point(model, float(w), template=template, x0=previous, **options)
         points.append(_reduce(p))
+        ok = p.solution.success and np.all(np.isfinite(p.solution.q))
+        previous = p.solution if ok else None
         if progress is not None:
             progress(i, p)
     return sweep_dataset(points, options)

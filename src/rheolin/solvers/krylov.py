@@ -39,10 +39,12 @@ def _real_gmres(
     opts: Options,
     scale: float,
     restart: int,
+    x0: np.ndarray | None = None,
 ) -> tuple[np.ndarray, int, list[float]]:
     """GMRES over R on half-spectrum complex arrays (rows = harmonics ``n >= 0``).
 
-    ``scale`` converts the residual to the reported one: ``||r|| / scale``.
+    ``scale`` converts the residual to the reported one: ``||r|| / scale``; ``x0`` is an
+    initial guess (same shape as ``rhs``).
     """
     shape = rhs.shape
     w = np.sqrt(weights)[:, None]
@@ -73,7 +75,7 @@ def _real_gmres(
     y, info = spla.gmres(
         B,
         b,
-        x0=np.zeros(size),
+        x0=np.zeros(size) if x0 is None else to_real(x0),
         rtol=min(opts.rtol * scale / bnorm, 0.5),
         atol=0.0,
         restart=restart,
@@ -84,35 +86,92 @@ def _real_gmres(
     return to_half(y), int(info), history
 
 
-@register("gmres")
-def solve_gmres(op: HarmonicBalance, opts: Options) -> SolverOutcome:
-    """Krylov solve of the coupled harmonic-balance system (strategy by ``dA``'s support)."""
+#: Refinement steps against the recomputed residual when ``A0^-1`` is approximate (modal).
+MAX_REFINEMENTS = 3
+
+Step = Callable[[np.ndarray, "np.ndarray | None"], tuple[np.ndarray, int, list[float]]]
+
+
+def _better_than_zero(
+    apply: Callable[[np.ndarray], np.ndarray],
+    rhs: np.ndarray,
+    x0: np.ndarray | None,
+    norm: Callable[[np.ndarray], float],
+) -> np.ndarray | None:
+    """``x0`` if its residual is below that of zero (``||rhs||``), else None: a guess from
+    a distant speed must not make GMRES start worse than from scratch."""
+    if x0 is None or not norm(rhs - apply(x0)) < norm(rhs):
+        return None
+    return x0
+
+
+def _support_step(op: HarmonicBalance, opts: Options) -> Step:
+    """GMRES on the support of ``dA`` (see the module); returns ``F, x0 -> (Q, info, hist)``."""
     rows, cols = op.support
     weights = np.where(op.pos == 0, 1.0, 2.0)
-    scale = op.rhs_norm
-    if max(rows.size, cols.size) <= MAX_SUPPORT:
-        strategy = "support"
-        q0 = op.solve_A0(op.rhs)
-        G = op.restricted_inverse(cols, rows)  # (|H+|, |C|, |R|)
+    G = op.restricted_solver(cols, rows)  # z_n -> A0(n)^-1[C, R] z_n
 
-        def reduced(Z: np.ndarray) -> np.ndarray:
-            return Z + op.apply_dA_support((G @ Z[:, :, None])[:, :, 0], rows, cols)
+    def reduced(Z: np.ndarray) -> np.ndarray:
+        return Z + op.apply_dA_support(G(Z), rows, cols)
 
+    def step(F: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, list[float]]:
+        q0 = op.solve_A0(F)
         rhs = -op.apply_dA_support(q0[:, cols], rows, cols)
-        Z, info, history = _real_gmres(reduced, rhs, weights, opts, scale, restart=200)
-        Y = op.rhs.copy()
+        Z0 = None if x0 is None else -op.apply_dA_support(x0[:, cols], rows, cols)
+        Z0 = _better_than_zero(reduced, rhs, Z0, op.norm)
+        Z, info, history = _real_gmres(reduced, rhs, weights, opts, op.rhs_norm, 200, Z0)
+        Y = F.copy()
         Y[:, rows] += Z
-        Q = op.solve_A0(Y)
-    else:
-        strategy = "full"
+        return op.solve_A0(Y), info, history
 
-        def preconditioned(Y: np.ndarray) -> np.ndarray:
-            return Y + op.apply_dA(op.solve_A0(Y))
+    return step
 
-        Y, info, history = _real_gmres(preconditioned, op.rhs, weights, opts, scale, restart=60)
-        Q = op.solve_A0(Y)
+
+def _full_step(op: HarmonicBalance, opts: Options) -> Step:
+    """GMRES on the whole half vector, right-preconditioned by ``A0^-1``."""
+    weights = np.where(op.pos == 0, 1.0, 2.0)
+
+    def preconditioned(Y: np.ndarray) -> np.ndarray:
+        return Y + op.apply_dA(op.solve_A0(Y))
+
+    def step(F: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, list[float]]:
+        Y0 = None if x0 is None else op.apply_A0(x0)
+        Y0 = _better_than_zero(preconditioned, F, Y0, op.norm)
+        Y, info, history = _real_gmres(preconditioned, F, weights, opts, op.rhs_norm, 60, Y0)
+        return op.solve_A0(Y), info, history
+
+    return step
+
+
+@register("gmres")
+def solve_gmres(op: HarmonicBalance, opts: Options) -> SolverOutcome:
+    """Krylov solve of the coupled harmonic-balance system (strategy by ``dA``'s support).
+
+    With an approximate ``A0^-1`` (the modal backend) the answer is refined against the
+    recomputed residual ``f - A q`` until it meets ``rtol`` (at most ``MAX_REFINEMENTS``
+    extra solves for the correction).
+    """
+    rows, cols = op.support
+    support = int(max(rows.size, cols.size))
+    strategy = "support" if support <= MAX_SUPPORT else "full"
+    step = _support_step(op, opts) if strategy == "support" else _full_step(op, opts)
+    Q, info, history = step(op.rhs, opts.x0)
+    refinements = 0
+    while info == 0 and not op.inverse.exact and refinements < MAX_REFINEMENTS:
+        R = op.residual(Q)
+        if op.norm(R) <= opts.rtol * op.rhs_norm:
+            break
+        dQ, info, more = step(R, None)
+        Q, refinements = Q + dQ, refinements + 1
+        history += more
     its = len(history)
-    extra = {"strategy": strategy, "support": int(max(rows.size, cols.size))}
+    extra = {
+        "strategy": strategy,
+        "support": support,
+        "backend": op.inverse.name,
+        "refinements": refinements,
+        "warm_start": opts.x0 is not None,
+    }
     if info == 0:
         msg = f"converged in {its} iterations ({strategy} strategy)"
         return SolverOutcome(Q, True, 0, msg, "gmres", its, history, extra)

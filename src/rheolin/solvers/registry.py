@@ -20,6 +20,8 @@ class Options:
     maxiter: int | None = None
     callback: Callable[[int, float], None] | None = None
     extra: dict = field(default_factory=dict)
+    #: Initial guess: the half ``n >= 0`` of the coefficients (None: start from zero).
+    x0: np.ndarray | None = None
 
 
 @dataclass

@@ -39,6 +39,10 @@ def solve(
     workers: int | None = None,
     stability: bool | None = None,
     options: Mapping[str, Any] | None = None,
+    x0: Solution | np.ndarray | None = None,
+    backend: str = "auto",
+    sparse_backend: str = "auto",
+    memory_budget: str | int | None = None,
 ) -> Solution:
     """Periodic steady state of ``M(t) q'' + D(t) q' + K(t) q = f(t)`` by harmonic balance.
 
@@ -59,7 +63,9 @@ def solve(
     callback
         Called as ``callback(iteration, relative_residual)`` by iterative methods.
     workers
-        Threads for the per-harmonic factorizations and solves (default: the cores).
+        Threads for the per-harmonic SuperLU factorizations and solves, from one long-lived
+        pool (default 1: SuperLU holds the GIL, so threads rarely pay; see
+        :mod:`rheolin.linalg.pool`).
     stability
         Check Floquet stability (Hill's method, :func:`rheolin.floquet` with its automatic
         choice of truncation) of the operating point. ``None`` (default) checks whenever the
@@ -71,6 +77,24 @@ def solve(
         Floquet result is kept in ``Solution.floquet``.
     options
         Method-specific options (e.g. for ``"transient"``), passed through unchanged.
+    x0
+        Initial guess for the iterative methods: a :class:`~rheolin.Solution` (e.g. at a
+        neighbouring speed of a sweep; matched by harmonic index, missing ones are zero) or
+        coefficients over ``harmonics`` (shape ``(len(harmonics), n)``).
+    backend
+        Inverse of the time-averaged blocks ``A0(n)``: ``"auto"`` (by size), ``"lu"``
+        (sparse LU per harmonic), ``"dense"`` (batched dense LU, small systems) or
+        ``"modal"`` (one eigendecomposition for every harmonic; falls back to ``"lu"`` when
+        its accuracy check fails). See :mod:`rheolin.linalg`.
+    sparse_backend
+        Sparse direct solver behind ``"lu"``: ``"auto"`` (the fastest installed: MKL
+        PARDISO, then UMFPACK via kvxopt, then SciPy's SuperLU), or one of those by name
+        (:mod:`rheolin.linalg.direct`).
+    memory_budget
+        What the solve may use (bytes or ``"8 GB"``); default ``RHEOLIN_SOLVE_MEMORY``, else
+        most of the memory available (:func:`rheolin.budget.solve_budget`). The estimate is
+        checked before allocating (:class:`~rheolin.budget.MemoryBudgetError` with the
+        estimate and what to change); factors beyond it are refactorized on demand.
 
     Returns
     -------
@@ -100,9 +124,38 @@ def solve(
     if method not in allowed:
         raise ValueError(f"`method` must be one of {allowed}, got {method!r}")
     opts = Options(rtol=float(rtol), maxiter=maxiter, callback=callback, extra=dict(options or {}))
-    op = HarmonicBalance(system, hset, workers=workers)
+    op = HarmonicBalance(
+        system,
+        hset,
+        workers=workers,
+        backend=backend,
+        sparse_backend=sparse_backend,
+        memory_budget=memory_budget,
+    )
+    opts.x0 = _initial_guess(op, x0)
     sol = _auto(op, opts) if method == "auto" else _finish(op, _run(method, op, opts), opts)
     return _check_stability(system, sol, stability)
+
+
+def _initial_guess(op: HarmonicBalance, x0: Solution | np.ndarray | None) -> np.ndarray | None:
+    """The half ``n >= 0`` of an initial guess, on the operator's harmonics."""
+    if x0 is None:
+        return None
+    if isinstance(x0, Solution):
+        out = np.zeros_like(op.rhs)
+        if x0.q.shape[1] != op.n_dof:
+            raise ValueError(f"`x0` has {x0.q.shape[1]} DOFs, the system {op.n_dof}")
+        where = {int(n): i for i, n in enumerate(x0.harmonics)}
+        for i, n in enumerate(op.pos):
+            if int(n) in where:
+                out[i] = x0.q[where[int(n)]]
+        return out
+    arr = np.asarray(x0, dtype=complex)
+    if arr.shape != (op.full.size, op.n_dof):
+        raise ValueError(
+            f"`x0` must have shape ({op.full.size}, {op.n_dof}) (harmonics x DOFs), got {arr.shape}"
+        )
+    return op.half(arr)
 
 
 def stability_harmonics(system: PeriodicSystem) -> HarmonicSet:
@@ -173,6 +226,14 @@ def _finish(op: HarmonicBalance, out: SolverOutcome, opts: Options, note: str = 
         message = f"{note}; {message}"
     if not success:
         log.warning("%s: %s", out.method, message)
+    info = dict(out.info)
+    info["memory_estimate"] = op.memory.total
+    store = getattr(op._inverse, "store", None)
+    if store is not None:
+        info["sparse_backend"] = store.name
+        info["refactorizations"] = store.refactorizations
+    if op.backend_note:
+        info["backend_note"] = op.backend_note
     return Solution(
         harmonics=op.full.copy(),
         q=op.expand(out.Q),
@@ -184,7 +245,7 @@ def _finish(op: HarmonicBalance, out: SolverOutcome, opts: Options, note: str = 
         iterations=out.iterations,
         history=list(out.history),
         residual=float(residual),
-        info=dict(out.info),
+        info=info,
     )
 
 

@@ -37,6 +37,7 @@ __all__ = [
     "MESH",
     "ROTATING_DAMPING",
     "Mechanism",
+    "classify",
     "generator_table",
     "identify",
 ]
@@ -139,23 +140,50 @@ def _has_rotating_damping(model: Any) -> bool:
 
 
 def identify(model: Any, assembled: Any, result: Any) -> Mechanism:
+    """The mechanism of the leading exponent of a lattice :class:`~rheolin.FloquetResult`
+    of an assembled model (the generators are its meshes and rotating bodies)."""
+    return classify(
+        result,
+        generator_table(assembled),
+        assembled.system.omega,
+        rotating_damping=_has_rotating_damping(model),
+    )
+
+
+def classify(
+    result: Any,
+    generators: list[tuple[str, int, str]],
+    omega: float,
+    *,
+    rotating_damping: bool = False,
+) -> Mechanism:
     """The mechanism of the leading exponent of a lattice :class:`~rheolin.FloquetResult`.
 
-    ``result`` must come from the lattice method (it carries the partner harmonics and the
-    time-averaged modes); for a stable result the category is ``""``.
+    Parameters
+    ----------
+    result
+        From the lattice method (it carries the partner harmonics and the time-averaged
+        modes); a stable result gives the category ``""``.
+    generators
+        ``(label, harmonic, kind)`` with kind ``"mesh"`` or ``"body"``
+        (:func:`generator_table` for a model).
+    omega
+        The base frequency ``w1`` [rad/s].
+    rotating_damping
+        The system has rotating damping (names a time-invariant instability).
     """
     lam0 = result.averaged
-    w = assembled.system.omega
+    w = omega
     if result.stable:
         return Mechanism("")
     lead = complex(result.exponents[0])
     tol = float(result.tolerances[0]) if result.tolerances.size else 0.0
     atol = result.averaged_tol if result.averaged_tol.size == lam0.size else np.full(lam0.size, tol)
     if lam0.size and bool(np.any(lam0.real > atol)):
-        cat = ROTATING_DAMPING if _has_rotating_damping(model) else CIRCULATORY
+        cat = ROTATING_DAMPING if rotating_damping else CIRCULATORY
         return Mechanism(cat, "time-invariant", (), "", lead)
-    h, mode_h = result.partner[0] if result.partner else (0, -1)
-    table = generator_table(assembled)
+    h, mode_a, mode_h = result.partner[0] if result.partner else (0, -1, -1)
+    table = generators
     coef = _decompose(h, table)
     if coef is None:
         return Mechanism(UNIDENTIFIED, "", (), f"partner harmonic {h} (x {w:.4g} rad/s)", lead)
@@ -169,7 +197,7 @@ def identify(model: Any, assembled: Any, result: Any) -> Mechanism:
         resonance = "combination"
     exc = combination_text(coef[used] * int(np.sign(h)), [table[i][0] for i in used])
     freq = abs(h) * w
-    j = int(result.dominant[0]) if result.dominant.size else -1
+    j = int(mode_a)
     wj = abs(lam0[j].imag) if j >= 0 else abs(lead.imag)
     if mode_h >= 0 and j >= 0 and np.isclose(lam0[mode_h], np.conj(lam0[j]), rtol=1e-9):
         modes = f"2 x {wj:.5g} rad/s"

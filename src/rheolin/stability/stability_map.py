@@ -376,7 +376,7 @@ def _tracked(res: FloquetResult) -> Any:
         return None
     grow = res.exponents.real > res.tolerances
     idx = res.dominant[grow] if grow.any() else res.dominant[:1]
-    partners = [m for (_, m) in (res.partner[i] for i in np.flatnonzero(grow)) if m >= 0]
+    partners = [m for p in (res.partner[i] for i in np.flatnonzero(grow)) for m in p[1:] if m >= 0]
     modes = sorted({int(i) for i in idx} | {int(m) for m in partners})
     return res.averaged[modes]
 

@@ -1,0 +1,251 @@
+"""Floquet stability of the embedded gearbox on the harmonic lattice (not a test).
+
+(a) One verdict at 3000 rpm: time and peak memory, against one steady-state solve of the same
+    model (closure order 3, 2,945 harmonics, ``stability=False``) measured in the same run.
+(b) Lattice order against the accuracy of the largest real part at 3000 rpm: orders 1..3
+    computed in full, order 4 and 5 near the leading exponent only.
+(c) A stability map over 1500-4500 rpm (``--speeds``, default 50 speeds): seconds per speed,
+    peak memory, decided verdicts, unstable ranges and their mechanisms, and two sample
+    speeds checked against a lattice two orders finer (near their leading exponents).
+
+Every measurement runs in its own subprocess (peak RSS from ``/proc``, see ``_memory.py``).
+
+Usage::
+
+    OPENBLAS_NUM_THREADS=1 python bench/stability.py [--speeds 50]
+        [--out bench/results/stability.md]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from _memory import reset_peak, status_kb
+
+HERE = Path(__file__).resolve().parent
+RPM = np.pi / 30
+
+
+def _model():  # type: ignore[no-untyped-def]
+    from rheolin.data import example_path
+    from rheolin.io import load_model
+
+    return load_model(example_path("gearbox"))
+
+
+# --------------------------------------------------------------------------- workers
+def _verdict(rpm: float) -> dict:
+    import rheolin as rl
+    from rheolin.results.compute import solve_point
+
+    model = _model()
+    solve_point(model, 3000 * RPM, stability=False)  # warm-up (imports, caches)
+    reset_peak()
+    t = time.perf_counter()
+    p = solve_point(model, rpm * RPM, stability=False)
+    solve_s = time.perf_counter() - t
+    solve_mb = status_kb("VmHWM") / 1024
+    system = model.assemble(rpm * RPM).system
+    reset_peak()
+    t = time.perf_counter()
+    res = rl.floquet(system)
+    seconds = time.perf_counter() - t
+    return {
+        "solve_seconds": solve_s,
+        "solve_peak_mb": solve_mb,
+        "harmonics": len(p.harmonics),
+        "seconds": seconds,
+        "peak_mb": status_kb("VmHWM") / 1024,
+        "order": res.lattice.order if res.lattice is not None else None,
+        "lattice": len(res.lattice) if res.lattice is not None else None,
+        "hill_size": int(res.info.get("hill_size", 0)),
+        "estimate_mb": res.info.get("memory_estimate", 0) / 2**20,
+        "decided": bool(res.decided),
+        "stable": bool(res.stable),
+        "max_real": float(res.max_real),
+        "leading_hz": float(abs(res.leading.imag) / (2 * np.pi)),
+        "computed": int(res.exponents.size),
+        "certified": int(2 * len(res.info.get("certified_modes", []))),
+        "settled": res.info.get("confirmed"),
+    }
+
+
+def _orders(rpm: float) -> dict:
+    import rheolin as rl
+
+    system = _model().assemble(rpm * RPM).system
+    rows = []
+    lead = None
+    for p in (1, 2, 3, 4, 5):
+        t = time.perf_counter()
+        if p <= 3:
+            res = rl.floquet(system, method="lattice", order=p)
+            lead = res.exponents[res.exponents.real >= res.max_real - 1e-9]
+        else:
+            res = rl.floquet(system, method="lattice", order=p, near=lead)
+        rows.append(
+            {
+                "order": p,
+                "lattice": len(res.lattice),
+                "max_real": float(res.max_real),
+                "truncation": float(res.truncation[0]),
+                "decided": bool(res.decided) if p <= 3 else None,
+                "seconds": time.perf_counter() - t,
+                "full": p <= 3,
+            }
+        )
+    return {"rows": rows}
+
+
+def _map(count: int) -> dict:
+    import rheolin as rl
+    from rheolin.stability import stability_map
+
+    model = _model()
+    speeds = np.linspace(1500, 4500, count) * RPM
+    per: list[float] = []
+    last = [time.perf_counter()]
+
+    def tick(i: int, res: object) -> None:
+        now = time.perf_counter()
+        per.append(now - last[0])
+        last[0] = now
+
+    reset_peak()
+    t = time.perf_counter()
+    smap = stability_map(model, speeds, refine=1e-5, progress=tick)
+    seconds = time.perf_counter() - t
+    checks = []
+    for rpm in (1500 + 1000, 4500 - 500):
+        system = model.assemble(rpm * RPM).system
+        res = rl.floquet(system)
+        lead = res.exponents[res.exponents.real >= res.max_real - 1e-9]
+        fine = rl.floquet(system, method="lattice", order=res.lattice.order + 2, near=lead)
+        checks.append(
+            {
+                "rpm": rpm,
+                "order": res.lattice.order,
+                "max_real": float(res.max_real),
+                "fine_max_real": float(fine.max_real),
+                "diff": float(abs(fine.max_real - res.max_real)),
+                "estimate": float(10 * res.truncation[0]),
+            }
+        )
+    return {
+        "speeds": count,
+        "seconds": seconds,
+        "per_speed": per,
+        "peak_mb": status_kb("VmHWM") / 1024,
+        "decided": int(np.sum(smap.decided)),
+        "stable": int(np.sum(smap.stable)),
+        "max_real": float(np.max(smap.max_real)),
+        "ranges": [
+            {"lower_rpm": r.lower / RPM, "upper_rpm": r.upper / RPM, "label": r.label}
+            for r in smap.ranges
+        ],
+        "checks": checks,
+        "info": {k: v for k, v in smap.info.items() if k != "seconds"},
+    }
+
+
+def _run(args: list[str]) -> dict:
+    out = subprocess.run(
+        [sys.executable, __file__, *args], capture_output=True, text=True, check=True
+    )
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+# --------------------------------------------------------------------------- report
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--speeds", type=int, default=50)
+    ap.add_argument("--out", type=Path, default=None)
+    ap.add_argument("--worker", nargs="*", default=None, help=argparse.SUPPRESS)
+    a = ap.parse_args()
+    if a.worker:
+        kind, value = a.worker[0], a.worker[1]
+        fn = {"verdict": _verdict, "orders": _orders, "map": _map}[kind]
+        arg = int(value) if kind == "map" else float(value)
+        print(json.dumps(fn(arg)))
+        return
+    v = _run(["--worker", "verdict", "3000"])
+    o = _run(["--worker", "orders", "3000"])
+    m = _run(["--worker", "map", str(a.speeds)])
+    lines = [
+        "# Floquet stability of the embedded gearbox (bench/stability.py)",
+        "",
+        "2 cores, BLAS on one thread, each measurement in its own process.",
+        "",
+        "## One verdict at 3000 rpm",
+        "",
+        "| | value |",
+        "|---|---|",
+        f"| steady-state solve (closure order 3, {v['harmonics']} harmonics) | "
+        f"{v['solve_seconds']:.2f} s, peak {v['solve_peak_mb']:.0f} MB |",
+        f"| stability verdict | {v['seconds']:.2f} s, peak {v['peak_mb']:.0f} MB "
+        f"(estimate {v['estimate_mb']:.0f} MB) |",
+        f"| verdict / solve | **{v['seconds'] / v['solve_seconds']:.1f}x** |",
+        f"| lattice | order {v['order']}, {v['lattice']} harmonics, Hill size {v['hill_size']} |",
+        f"| verdict | {'stable' if v['stable'] else 'UNSTABLE'}, "
+        f"{'decided' if v['decided'] else 'undecided'}; largest real part "
+        f"{v['max_real']:.6g} 1/s at {v['leading_hz']:.1f} Hz |",
+        f"| exponents | {v['computed']} computed, {v['certified']} certified by Gershgorin "
+        f"discs; unresolved settled: {v['settled']} |",
+        "",
+        "## Lattice order against the largest real part (3000 rpm)",
+        "",
+        "| order | harmonics | largest real part [1/s] | change | truncation estimate | "
+        "decided | seconds |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    prev = None
+    for r in o["rows"]:
+        change = "" if prev is None else f"{abs(r['max_real'] - prev):.2e}"
+        how = "" if r["full"] else " (near the leading exponent only)"
+        dec = "" if r["decided"] is None else ("yes" if r["decided"] else "no")
+        lines.append(
+            f"| {r['order']}{how} | {r['lattice']} | {r['max_real']:.10g} | {change} | "
+            f"{r['truncation']:.2e} | {dec} | {r['seconds']:.1f} |"
+        )
+        prev = r["max_real"]
+    per = np.array(m["per_speed"])
+    lines += [
+        "",
+        f"## Stability map, {m['speeds']} speeds over 1500-4500 rpm",
+        "",
+        f"- {m['seconds']:.0f} s in all ({np.median(per):.1f} s median per speed, "
+        f"{per.min():.1f}-{per.max():.1f} s), peak {m['peak_mb']:.0f} MB;",
+        f"- {m['decided']} of {m['speeds']} verdicts decided, {m['stable']} stable; "
+        f"largest real part {m['max_real']:.5g} 1/s;",
+        "- unstable ranges: "
+        + (
+            "; ".join(
+                f"{r['lower_rpm']:.1f}-{r['upper_rpm']:.1f} rpm ({r['label']})" for r in m["ranges"]
+            )
+            or "none"
+        ),
+        "",
+        "| rpm | order | largest real part | order + 2 (near it) | difference | 10 x estimate |",
+        "|---|---|---|---|---|---|",
+    ]
+    for c in m["checks"]:
+        lines.append(
+            f"| {c['rpm']:.0f} | {c['order']} | {c['max_real']:.10g} | {c['fine_max_real']:.10g}"
+            f" | {c['diff']:.2e} | {c['estimate']:.2e} |"
+        )
+    text = "\n".join(lines) + "\n"
+    print(text)
+    if a.out:
+        a.out.parent.mkdir(parents=True, exist_ok=True)
+        a.out.write_text(text)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,339 @@
+"""``floquet``: one entry point; it chooses the truncation (dense grid or lattice) within the
+memory budget.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+
+from ..budget import MemoryBudgetError, format_bytes
+from ..budget import memory_budget as resolve_budget
+from ..harmonics import HarmonicSet, as_harmonic_set
+from ..lattice import Lattice, harmonic_lattice, system_lattice
+from ..system import PeriodicSystem
+from .averaged import lattice_memory
+from .confirm import confirm_unresolved
+from .dense import _floquet_dense
+from .result import FloquetResult, _result
+from .search import lattice_exponents
+from .sparse import _floquet_sparse
+
+__all__ = [
+    "AUTO_DENSE_LIMIT",
+    "DEFAULT_LATTICE_ORDER",
+    "MAX_DENSE_HILL",
+    "dense_stability_harmonics",
+    "floquet",
+    "floquet_memory",
+]
+
+log = logging.getLogger(__name__)
+
+
+#: Dense Hill matrices beyond this size are refused (sparse shift-invert is the way there).
+MAX_DENSE_HILL = 6000
+
+
+#: ``method="auto"`` uses the dense path up to this Hill size, the sparse one beyond.
+AUTO_DENSE_LIMIT = 1500
+
+
+#: Lattice order of ``floquet(system)`` (raised by one where the verdict is undecided).
+DEFAULT_LATTICE_ORDER = 2
+
+
+def floquet(
+    system: PeriodicSystem,
+    harmonics: HarmonicSet | Lattice | int | Iterable[int] | None = None,
+    *,
+    method: str = "auto",
+    order: int | None = None,
+    frequencies: tuple[float, float] | None = None,
+    k: int = 24,
+    max_shifts: int = 200,
+    memory_budget: str | int | float | None = None,
+    near: Any = None,
+) -> FloquetResult:
+    """Floquet exponents by Hill's method.
+
+    The truncated Hill pencil has a copy of every exponent for each harmonic, shifted by
+    ``i h w1``; the representative kept is the eigenvalue whose eigenvector is centred on
+    harmonic 0. The pencil is balanced first (:func:`~rheolin.hill.state_scaling`) and every
+    exponent carries its own tolerance from its condition number, so stiff springs next to
+    soft ones, rigid-body modes and undamped modes do not turn into false instabilities.
+
+    Parameters
+    ----------
+    system
+        The periodic system (the load is ignored).
+    harmonics
+        The truncation. ``None`` (default) chooses: the time-averaged eigenproblem for a
+        time-invariant system; the dense grid of :func:`dense_stability_harmonics` when its
+        Hill matrix is small; else the lattice of :func:`~rheolin.lattice.system_lattice`.
+        An int ``N`` means ``-N..N``; a :class:`~rheolin.lattice.Lattice` selects the lattice
+        method. The dense and sparse methods accept only dense grids (multiples of one
+        step), because their representatives and truncation test assume one.
+    method
+        ``"auto"``, ``"dense"`` (all exponents, QZ), ``"sparse"`` (exponents near the
+        imaginary axis, shift-invert) or ``"lattice"`` (module :mod:`rheolin.floquet_lattice`).
+    order
+        Lattice order. ``None``: :data:`DEFAULT_LATTICE_ORDER`, raised by one when the
+        verdict is undecided and the larger lattice fits the memory budget.
+    frequencies
+        Sparse method: range ``(lo, hi)`` [rad/s] of the (unfolded) imaginary parts searched,
+        default ``(0, max|H| w1 / 2)``: modes up to half the truncation frequency, which is
+        where the centred copies have room for their sidebands. Real systems have conjugate
+        exponents, so only ``Im >= 0`` is searched and the conjugates are added.
+    k
+        Sparse method: eigenvalues per shift.
+    max_shifts
+        Sparse method: cap on the number of shifts (factorizations).
+    near
+        Lattice method: search only near the time-averaged modes closest to these values
+        (tracking one exponent across speeds). The result is partial (``complete`` is
+        False, ``decided`` too).
+    memory_budget
+        Refuse (:class:`~rheolin.budget.MemoryBudgetError`, before allocating) when the
+        estimated memory exceeds it (bytes or ``"4 GB"``; default
+        :func:`rheolin.budget.memory_budget`). The automatic choice lowers the lattice order
+        instead, and says so in ``info["note"]``.
+
+    Examples
+    --------
+    Mathieu's equation ``y'' + (a - 2 q cos 2t) y = 0`` at ``a = 1, q = 0.2`` lies inside the
+    first instability band ``(b_1, a_1)``:
+
+    >>> import numpy as np, rheolin as rl
+    >>> s = rl.PeriodicSystem(2.0, M={0: np.eye(1)}, K={0: np.eye(1), 1: -0.2 * np.eye(1)})
+    >>> res = rl.floquet(s, 10)
+    >>> res.stable, len(res.exponents), res.converged
+    (False, 2, True)
+    >>> bool(abs(rl.floquet(s, 10, method="sparse").max_real - res.max_real) < 1e-10)
+    True
+    >>> lat = rl.floquet(s, method="lattice", order=10)
+    >>> lat.method, bool(abs(lat.max_real - res.max_real) < 1e-10), lat.decided
+    ('lattice', True, True)
+    """
+    allowed = ("auto", "dense", "sparse", "lattice")
+    if method not in allowed:
+        raise ValueError(f"`method` must be one of {list(allowed)}, got {method!r}")
+    budget = memory_budget
+    if isinstance(harmonics, Lattice):
+        if method not in ("auto", "lattice"):
+            raise ValueError(
+                f"a Lattice truncation needs method='lattice' (or 'auto'), got {method!r}"
+            )
+        return _floquet_lattice(system, harmonics, budget=budget, near=near)
+    if near is not None and method != "lattice":
+        raise ValueError("`near` needs method='lattice'")
+    if method == "lattice":
+        if harmonics is not None:
+            raise ValueError(
+                "method='lattice' builds its own truncation: pass `order` (and no `harmonics`), "
+                "or a rheolin.lattice.Lattice as `harmonics`"
+            )
+        return _lattice_auto(
+            system, order, budget, refine=order is None and near is None, near=near
+        )
+    if harmonics is None:
+        if system.time_invariant:
+            hset = HarmonicSet([0])
+        else:
+            if (
+                method == "auto"
+                and 2 * system.n * (2 * _dense_order(system) + 1) > AUTO_DENSE_LIMIT
+            ):
+                return _lattice_auto(system, order, budget, refine=order is None)
+            hset = dense_stability_harmonics(system)
+    else:
+        hset = as_harmonic_set(harmonics)
+    _require_grid(hset)
+    size = 2 * system.n * len(hset)
+    if method == "auto":
+        method = "dense" if size <= AUTO_DENSE_LIMIT else "sparse"
+    if method == "dense":
+        if size > MAX_DENSE_HILL:
+            raise ValueError(
+                f"the dense Hill matrix would have size {size} (2 x n x |H|) > {MAX_DENSE_HILL}; "
+                "reduce `harmonics` or the model size, or use method='sparse'"
+            )
+        _check_budget(size * size * 16 * 7, budget, "the dense Hill problem", "fewer harmonics")
+        with np.errstate(under="ignore"):  # far harmonics of eigenvectors underflow harmlessly
+            return _floquet_dense(system, hset)
+    if isinstance(k, bool) or int(k) < 1:
+        raise ValueError(f"`k` must be a positive integer, got {k!r}")
+    with np.errstate(under="ignore"):
+        return _floquet_sparse(system, hset, frequencies, int(k), int(max_shifts))
+
+
+def _dense_order(system: PeriodicSystem) -> int:
+    kmax = max((abs(k) for k in system.coefficient_harmonics), default=0)
+    return 2 * kmax + 4 if kmax else 0
+
+
+def dense_stability_harmonics(system: PeriodicSystem) -> HarmonicSet:
+    """Dense Hill truncation ``-N..N`` with ``N`` twice the widest coefficient harmonic + 4
+    (``{0}`` for a time-invariant system)."""
+    return HarmonicSet.full(_dense_order(system))
+
+
+def _require_grid(hset: HarmonicSet) -> None:
+    """Dense and sparse Hill need ``{-N s, ..., N s}``: refuse any other set."""
+    H = hset.indices
+    step = int(np.gcd.reduce(np.abs(H))) or 1
+    N = int(H.max()) // step
+    if H.size != 2 * N + 1 or not np.array_equal(H, step * np.arange(-N, N + 1)):
+        raise ValueError(
+            f"`harmonics` must be a dense grid -N..N (times one step) for the dense and sparse "
+            f"Hill methods; this set has {H.size} of the {2 * N + 1} multiples of {step} up to "
+            f"{N * step}. Their representatives and truncation test assume a grid and would "
+            "judge a lattice wrongly: use method='lattice' (rl.floquet(system, "
+            "method='lattice', order=p)) or pass a rheolin.lattice.Lattice"
+        )
+
+
+def _check_budget(estimate: int, budget: Any, what: str, advice: str) -> None:
+    limit = resolve_budget(budget)
+    if estimate > limit:
+        raise MemoryBudgetError(
+            f"{what} needs an estimated {format_bytes(estimate)}, more than the memory budget "
+            f"of {format_bytes(limit)}; {advice}, or raise the budget (RHEOLIN_MEMORY_BUDGET "
+            "or `memory_budget`)"
+        )
+
+
+def floquet_memory(system: PeriodicSystem, order: int | None = None) -> tuple[str, int]:
+    """The method ``floquet(system)`` would use and its estimated memory [bytes].
+
+    For the lattice method ``order`` is the lattice order (default
+    :data:`DEFAULT_LATTICE_ORDER`). Nothing large is built.
+    """
+    if system.time_invariant:
+        size = 2 * system.n
+        if size <= AUTO_DENSE_LIMIT:
+            return "dense", size * size * 16 * 7
+        return "sparse", int(system.n * 16 * 400 + 200 * 2**20)
+    size = 2 * system.n * (2 * _dense_order(system) + 1)
+    if size <= AUTO_DENSE_LIMIT:
+        return "dense", size * size * 16 * 7
+    p = DEFAULT_LATTICE_ORDER if order is None else int(order)
+    return "lattice", lattice_memory(system, system_lattice(system, p, max_size=10**6))
+
+
+def _lattice_auto(
+    system: PeriodicSystem, order: int | None, budget: Any, *, refine: bool, near: Any = None
+) -> FloquetResult:
+    """Lattice method at ``order`` (default order, lowered to fit the budget, raised by one
+    when undecided and the larger lattice fits)."""
+    limit = resolve_budget(budget)
+    p = DEFAULT_LATTICE_ORDER if order is None else int(order)
+    note = ""
+    lat = system_lattice(system, p, max_size=10**6)
+    est = lattice_memory(system, lat)
+    while est > limit and order is None and p > 1:
+        p -= 1
+        lat = system_lattice(system, p, max_size=10**6)
+        est = lattice_memory(system, lat)
+        note = (
+            f"lattice order lowered to {p} to fit the memory budget of {format_bytes(limit)} "
+            "(a coarser truncation: the verdict may be undecided)"
+        )
+    res = _floquet_lattice(system, lat, budget=budget, near=near)
+    if note:
+        res.info["note"] = note
+    if refine and not res.decided:
+        finer = system_lattice(system, p + 1, max_size=10**6)
+        if lattice_memory(system, finer) <= limit:
+            log.info("floquet: order %d undecided; refining to order %d", p, p + 1)
+            res2 = _floquet_lattice(system, finer, budget=budget)
+            res2.info["refined_from"] = p
+            return res2
+        more = f"undecided at lattice order {p}; order {p + 1} would exceed the memory budget"
+        res.info["note"] = f"{note}; {more}" if note else more
+    return res
+
+
+def _floquet_lattice(
+    system: PeriodicSystem, lattice: Lattice, *, budget: Any, near: Any = None
+) -> FloquetResult:
+    t0 = time.perf_counter()
+    est = lattice_memory(system, lattice)
+    _check_budget(
+        est,
+        budget,
+        f"the lattice Hill problem (order {lattice.order}, {len(lattice)} harmonics, "
+        f"size {2 * system.n * len(lattice)})",
+        "lower the lattice order",
+    )
+    with np.errstate(under="ignore"), _single_thread_blas():
+        out = lattice_exponents(system, lattice, near=near)
+        # unresolved exponents: search their clusters again on finer lattices (p + 1, p + 2),
+        # only near them, as long as the memory budget allows
+        finer: Lattice | None = lattice
+        steps: list[Any] = []
+        while near is None and np.any(out.unresolved & ~out.certified) and len(steps) < 2:
+            finer = _finer(system, finer) if finer is not None else None
+            if finer is None or lattice_memory(system, finer) > resolve_budget(budget):
+                break
+            out = confirm_unresolved(system, out, finer)
+            steps.append(out.info.pop("confirmed"))
+        if steps:
+            out.info["confirmed"] = steps
+    w = system.omega
+    res = _result(out.exponents, out.bounds, out.edge, w, "lattice", info=out.info)
+    order = np.argsort(-out.exponents.real, kind="stable")
+    res.truncation = out.truncation[order]
+    res.info["order"] = out.order[order]
+    res.info["uncertainty"] = out.uncertainty[order]
+    res.dominant = out.dominant[order]
+    res.partner = [out.partner[i] for i in order]
+    res.complete = out.complete and near is None
+    res.lattice = lattice
+    res.averaged = out.averaged
+    res.averaged_tol = out.averaged_tol
+    res.info["memory_estimate"] = est
+    res.info["seconds"] = time.perf_counter() - t0
+    res.info["centroid"] = out.centroid[order]
+    res.info["split_gap"] = out.split_gap[order]
+    res.info["unresolved"] = out.unresolved[order]
+    res.info["certified"] = out.certified[order]
+    for key in ("certified_modes", "certified_radii"):
+        res.info[key] = out.info.get(key)
+    if "confirmed" in out.info:
+        res.info["confirmed"] = out.info["confirmed"]
+    res.info["liouville"] = out.liouville
+    return res
+
+
+def _finer(system: PeriodicSystem, lattice: Lattice) -> Lattice | None:
+    """The lattice of the next order with the same steps (None past ``max_size``)."""
+    steps = dict(zip(lattice.generators, lattice.costs, strict=True))
+    if not steps:
+        return None
+    try:
+        return harmonic_lattice(steps, lattice.order + 1, max_size=10**6)
+    except ValueError:
+        return None
+
+
+class _single_thread_blas:
+    """Limit BLAS to one thread: the lattice kernels are many small products, where
+    threads cost more than they bring (2x slower on the gearbox with two)."""
+
+    def __enter__(self) -> None:
+        try:
+            from threadpoolctl import threadpool_limits
+        except ImportError:  # pragma: no cover - threadpoolctl is a dependency
+            self._ctx = None
+            return
+        self._ctx = threadpool_limits(limits=1, user_api="blas")
+        self._ctx.__enter__()
+
+    def __exit__(self, *exc: Any) -> None:
+        if self._ctx is not None:
+            self._ctx.__exit__(*exc)

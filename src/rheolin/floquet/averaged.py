@@ -1,0 +1,79 @@
+"""The time-averaged modes a lattice search starts from, and the memory a lattice search needs."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as sla
+
+from ..hill import hill_pencil, state_scaling
+from ..lattice import Lattice
+from ..operator import _Block
+from ..system import PeriodicSystem
+from .result import _EPS
+
+__all__ = ["LU_FILL", "MAX_AVERAGED_DENSE", "lattice_memory"]
+
+
+#: Dense eigen-decomposition of the time-averaged pencil up to this size (``2 n``).
+MAX_AVERAGED_DENSE = 4000
+
+
+#: Estimated LU fill of the lattice operator (entries of the factors / entries of ``Q``).
+LU_FILL = 12.0
+
+
+class _Averaged:
+    """Eigen-decomposition of the time-averaged balanced pencil (first-order, ``2 n``)."""
+
+    def __init__(self, system: PeriodicSystem) -> None:
+        n = system.n
+        if 2 * n > MAX_AVERAGED_DENSE:
+            raise ValueError(
+                f"the lattice Floquet method needs the modes of the time-averaged system "
+                f"densely (2 n = {2 * n} > {MAX_AVERAGED_DENSE}); reduce the model "
+                "(condensed bodies) or give a dense harmonic set with method='sparse'"
+            )
+        A, B = hill_pencil(system, [0])
+        Ad, Bd = A.toarray(), B.toarray()
+        lam, W, X = sla.eig(Ad, Bd, left=True, right=True, check_finite=False)
+        finite = np.isfinite(lam)
+        self.lam = lam[finite]
+        X, W = X[:, finite], W[:, finite]
+        X = X / np.linalg.norm(X, axis=0)
+        d = np.einsum("ij,ij->j", W.conj(), Bd @ X)
+        ok = np.abs(d) > 1e3 * _EPS * np.linalg.norm(W, axis=0)
+        self.W = W / np.where(ok, d, 1.0).conj()
+        self.X = X
+        self.WB = self.W.conj().T @ Bd  # modal coordinates of a balanced vector: WB @ y
+        # first-order rounding bound of each averaged exponent (huge in a Jordan block, such
+        # as the double zero of a free rotation): copies of it scatter by as much
+        normA, normB = np.linalg.norm(Ad, 1), np.linalg.norm(Bd, 1)
+        cond = np.linalg.norm(self.W, axis=0) / np.maximum(np.abs(d), np.finfo(float).tiny)
+        self.bound = _EPS * (normA + np.abs(self.lam) * normB) * np.where(ok, cond, np.inf)
+        self.modal = bool(ok.all()) and self.lam.size == 2 * n
+        self.sq, self.sv = state_scaling(system)
+        self.n = n
+
+
+def lattice_memory(system: PeriodicSystem, lattice: Lattice, k: int = 8) -> int:
+    """Estimated peak memory [bytes] of :func:`lattice_exponents` on ``lattice``.
+
+    Counted without building anything: the entries of the lattice operator (from the block
+    patterns and the number of harmonic pairs each coefficient harmonic couples), its LU at
+    :data:`LU_FILL` times those entries, the Arnoldi basis, and the dense averaged modes.
+    """
+    H = lattice.indices
+    n = system.n
+    nnz = 0
+    for k_h in [0, *system.coefficient_harmonics]:
+        pos = np.minimum(np.searchsorted(H, H + k_h), H.size - 1)
+        pairs = int(np.count_nonzero(H[pos] == H + k_h))
+        if not pairs:
+            continue
+        block = _Block(system.M.get(k_h), system.D.get(k_h), system.K.get(k_h), n, system.is_sparse)
+        nnz += pairs * int(block.entries()[0].size)
+    size2 = 2 * n * H.size
+    ncv = max(2 * k + 1, 20)
+    return int(
+        nnz * 16 * (6 + LU_FILL) + size2 * 16 * (ncv + 8) + (2 * n) ** 2 * 16 * 6 + 64 * 2**20
+    )

@@ -1,0 +1,173 @@
+"""Checks of a lattice result: truncation estimate, Gershgorin discs, split gaps, Liouville's
+identity.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ..hill_lattice import LatticeHill
+from ..system import PeriodicSystem
+from .averaged import MAX_AVERAGED_DENSE, _Averaged
+from .outcome import LatticeExponents
+from .result import TRUNCATION_SAFETY
+
+__all__ = ["liouville_sum"]
+
+
+class _Outer:
+    """Second-order truncation correction from the harmonics just outside the lattice."""
+
+    def __init__(self, hill: LatticeHill, avg: _Averaged) -> None:
+        self.hill = hill
+        self.avg = avg
+        self.O, self.oi, self.io = hill.outer()
+        n = hill.n
+        self.Xq = avg.X[:n] / avg.sq[:, None]  # Tq X_top
+        self.Wv = avg.W[n:].conj() / avg.sv[:, None]  # Tv-weighted conj(W_bot)
+
+    def estimate(self, lam: complex, q: np.ndarray, u: np.ndarray) -> float:
+        hill, n, w = self.hill, self.hill.n, self.hill.w
+        if self.O.size == 0:
+            return 0.0
+        r = np.asarray(self.oi.Q(lam, w) @ q).reshape(self.O.size, n)
+        a = np.conj(np.asarray(self.io.Q(lam, w).conj().T @ u)).reshape(self.O.size, n)
+        den = np.vdot(u, hill.inner.dQ(lam, w) @ q)
+        if den == 0:
+            return float("inf")
+        s_o = lam + 1j * w * self.O.astype(float)
+        if self.avg.modal:
+            Ga = a @ self.Xq
+            Gr = r @ self.Wv
+            with np.errstate(divide="ignore", invalid="ignore"):
+                term = -np.sum(Ga * Gr / (self.avg.lam[None, :] - s_o[:, None]))
+        else:
+            term = self._direct(a, r, s_o)
+        val = abs(term / den)
+        return float(val) if np.isfinite(val) else float("inf")
+
+    def _direct(self, a: np.ndarray, r: np.ndarray, s_o: np.ndarray) -> complex:
+        """Without a complete modal basis (massless DOFs): one LU of ``Q0(s)`` per harmonic."""
+        block = self.hill.blocks[0]
+        rows, cols, (K, D, M) = block.entries()
+        n = self.hill.n
+        total = 0j
+        weight = np.linalg.norm(a, axis=1) * np.linalg.norm(r, axis=1)
+        keep = np.flatnonzero(weight > 1e-14 * max(weight.max(), np.finfo(float).tiny))
+        for i in keep:
+            s = s_o[i]
+            Q0 = sp.csc_array((K + s * D + s * s * M, (rows, cols)), shape=(n, n))
+            try:
+                z = spla.spsolve(Q0, r[i])
+            except RuntimeError:
+                return complex("inf")
+            total += a[i] @ z
+        return total
+
+
+def _gershgorin(system: PeriodicSystem, avg: _Averaged, modes: list[int]) -> list[float]:
+    """Gershgorin radii of time-averaged modes in the modal Hill matrix of the infinite
+    lattice: ``sum_k sum_m |w_j^H E_k x_m|`` over every coefficient harmonic ``k`` (rows of
+    the balanced first-order coupling in modal coordinates, ``M_k`` at the row's local
+    frequency ``lambda_j - i k w1``). Every Hill exponent lies in the union of the discs of
+    radius ``R_j`` about the copies ``lambda_j - i h w1``, for any truncation."""
+    n, w = system.n, system.omega
+    Tq, Tv = sp.diags_array(1.0 / avg.sq), sp.diags_array(1.0 / avg.sv)
+    Wr = avg.W[:, modes].conj().T  # rows of the modal transform
+    out = np.zeros(len(modes))
+    for k in system.coefficient_harmonics:
+        Kk = sp.csr_array(Tv @ sp.csr_array(system.K[k]) @ Tq) if k in system.K else None
+        Dk = sp.csr_array(Tv @ sp.csr_array(system.D[k]) @ Tv) if k in system.D else None
+        Mk = sp.csr_array(Tv @ sp.csr_array(system.M[k]) @ Tv) if k in system.M else None
+        low = Wr[:, n:]  # the couplings act on the v rows
+        part = np.zeros((len(modes), 2 * n), dtype=complex)
+        if Kk is not None:
+            part[:, :n] += np.asarray((Kk.T @ low.T).T)
+        if Dk is not None:
+            part[:, n:] += np.asarray((Dk.T @ low.T).T)
+        if Mk is not None:
+            s = avg.lam[modes] - 1j * k * w
+            part[:, n:] += s[:, None] * np.asarray((Mk.T @ low.T).T)
+        out += np.abs(part @ avg.X).sum(axis=1)
+    return out.tolist()
+
+
+def _split_gaps(lam: np.ndarray, H: np.ndarray, w: float) -> np.ndarray:
+    """Distance of each exponent to the nearest copy of its conjugate at a lattice shift
+    (``|2 Im lambda - h w1|``, ``h`` in the lattice): where a complex pair can collide with it
+    and split into two exponents of different real parts. Zero for locked (self-conjugate)
+    exponents, whose partner is the other locked one: there the gap is their real distance."""
+    out = np.empty(lam.size)
+    hw = np.sort(H.astype(float) * w)
+    for i, z in enumerate(lam):
+        target = 2.0 * z.imag
+        j = np.clip(np.searchsorted(hw, target), 1, hw.size - 1) if hw.size > 1 else 0
+        near = hw[max(j - 1, 0) : j + 1]
+        gap = float(np.min(np.abs(near - target))) if near.size else np.inf
+        if gap <= 1e-9 * max(abs(z), w):  # locked: the partner is another locked exponent
+            locked = [
+                abs(z.real - x.real)
+                for k, x in enumerate(lam)
+                if (k != i and abs(2.0 * x.imag - target) <= 1e-6 * max(abs(z), w))
+                or (k != i and np.min(np.abs(hw - (x.imag + z.imag))) <= 1e-6 * max(abs(z), w))
+            ]
+            gap = min(locked) if locked else np.inf
+        out[i] = gap
+    return out
+
+
+def liouville_sum(system: PeriodicSystem) -> tuple[float, float]:
+    """``sum Re lambda`` over all ``2 n`` Floquet exponents by Liouville's formula,
+    ``-mean_t tr(M(t)^-1 D(t))``, and an uncertainty; ``(nan, inf)`` when ``M_0`` is singular
+    or too large to invert densely.
+
+    With a time-varying ``M`` the mean is expanded to second order in ``M_k``; the size of
+    the second-order terms is returned as the uncertainty (the neglected terms are smaller).
+    """
+    n = system.n
+    M0 = system.M.get(0)
+    if M0 is None or n > MAX_AVERAGED_DENSE // 2:
+        return float("nan"), float("inf")
+
+    def dense(x: Any) -> np.ndarray:
+        return x.toarray() if hasattr(x, "toarray") else np.asarray(x)
+
+    try:
+        Minv = np.linalg.inv(dense(M0))
+    except np.linalg.LinAlgError:
+        return float("nan"), float("inf")
+    if not np.all(np.isfinite(Minv)) or np.linalg.cond(dense(M0)) > 1e12:
+        return float("nan"), float("inf")
+    D0 = dense(system.D[0]) if 0 in system.D else np.zeros((n, n))
+    value = float(np.trace(Minv @ D0).real)
+    second = 0.0
+    for k, Mk in system.M.items():
+        if k == 0:
+            continue
+        A = Minv @ dense(Mk)
+        term = -np.trace(A @ Minv @ dense(system.D[-k])) if -k in system.D else 0.0
+        term = term + np.trace(A @ Minv @ dense(system.M[-k]) @ Minv @ D0)
+        second += float(np.real(term))
+    return -(value + second), abs(second) + 1e-12 * abs(value)
+
+
+def _agree(coarse: np.ndarray, fine: np.ndarray, fine_unresolved: np.ndarray) -> bool:
+    """Two truncations agree on a cluster: as many exponents, each within a tenth of its
+    distance from the axis of one of the other order, all of them stable."""
+    if coarse.size == 0 or coarse.size != fine.size:
+        return False
+    moved = max(float(np.min(np.abs(fine - z0))) for z0 in coarse)
+    worst = float(max(coarse.real.max(), fine.real.max()))
+    del fine_unresolved  # agreement is the test, resolved or not
+    return worst < 0 and TRUNCATION_SAFETY * moved < -worst
+
+
+def _certify(out: LatticeExponents, mine: np.ndarray, coarse: np.ndarray, fine: np.ndarray) -> None:
+    moved = max(float(np.min(np.abs(fine - z0))) for z0 in coarse)
+    hit = mine & out.unresolved
+    out.certified[hit] = True
+    out.uncertainty[hit] = np.maximum(out.uncertainty[hit], TRUNCATION_SAFETY * moved)

@@ -1,0 +1,110 @@
+"""Settling unresolved exponents on a finer lattice, near them only."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..lattice import Lattice
+from ..system import PeriodicSystem
+from .checks import _agree, _certify, _split_gaps
+from .outcome import LatticeExponents
+from .result import TRUNCATION_SAFETY
+from .search import lattice_exponents
+from .select import CLUSTER_TOL
+
+__all__ = ["confirm_unresolved"]
+
+
+def confirm_unresolved(
+    system: PeriodicSystem, out: LatticeExponents, finer: Lattice
+) -> LatticeExponents:
+    """Settle the unresolved, uncertified representatives on a finer lattice.
+
+    Their clusters are searched again on ``finer`` (only near them). Where the finer lattice
+    resolves a cluster, its exponents replace the coarse ones (each exponent keeps its own
+    ``order``); where it does not either, the cluster is confirmed when its largest real
+    part is negative at both orders and changes by less than ``1 / TRUNCATION_SAFETY`` of
+    its size (the verdict does not move with the truncation). Records
+    ``info["confirmed"]``.
+    """
+    todo = out.unresolved & ~out.certified
+    if not todo.any():
+        return out
+    centres = np.unique(out.centre[todo & (out.centre.imag >= 0)])
+    centres = centres[np.isfinite(centres)]
+    if centres.size == 0:
+        return out
+    fine = lattice_exponents(system, finer, near=centres)
+    fields = (
+        "exponents", "bounds", "truncation", "edge", "centroid", "dominant", "certified",
+        "centre", "unresolved", "order", "uncertainty", "radius",
+    )  # fmt: skip
+    keep = np.ones(out.exponents.size, dtype=bool)
+    take = np.zeros(fine.exponents.size, dtype=bool)
+    replaced = confirmed = 0
+
+    def members(arr: np.ndarray, z: complex) -> np.ndarray:
+        tol = CLUSTER_TOL * max(abs(z), system.omega)
+        return (np.abs(arr - z) <= tol) | (np.abs(arr - np.conj(z)) <= tol)
+
+    every = np.any([members(out.centre, z) for z in centres], axis=0)
+    there_all = np.any([members(fine.centre, z) for z in centres], axis=0)
+    if not fine.unresolved[there_all].any() and there_all.sum() == every.sum():
+        # the finer lattice resolves every cluster: take all of them (their attribution to
+        # one cluster or another may differ between orders; the set is what counts)
+        keep &= ~every
+        take |= there_all
+        replaced = int(centres.size)
+        centres = centres[:0]
+    left: list[complex] = []
+    for z in centres:
+        mine, there = members(out.centre, z), members(fine.centre, z)
+        if not there.any():
+            left.append(z)
+            continue
+        if not fine.unresolved[there].any() and there.sum() == mine.sum():
+            keep &= ~mine
+            take |= there
+            replaced += 1
+        elif _agree(out.exponents[mine], fine.exponents[there], fine.unresolved[there]):
+            _certify(out, mine, out.exponents[mine], fine.exponents[there])
+            confirmed += 1
+        else:
+            left.append(z)
+    if left:
+        # mixed neighbours trade exponents between orders: judge what is left as one group,
+        # by its largest real part, which must stay put and keep a margin of a tenth of the
+        # group's coupling radius (so that agreement by chance, both truncations sitting at
+        # the undisturbed damping of a strongly coupled mode, does not count)
+        mine = np.any([members(out.centre, z) for z in left], axis=0)
+        there = np.any([members(fine.centre, z) for z in left], axis=0)
+        radius = max(float(np.max(out.radius[mine], initial=0.0)), 0.0)
+        a = float(out.exponents.real[mine].max()) if mine.any() else 0.0
+        b = float(fine.exponents.real[there].max()) if there.any() else 0.0
+        if (
+            there.any()
+            and a < 0
+            and b < 0
+            and TRUNCATION_SAFETY * abs(a - b) < -max(a, b)
+            and -max(a, b) > 0.1 * radius
+        ):
+            hit = mine & out.unresolved
+            out.certified[hit] = True
+            out.uncertainty[hit] = np.maximum(out.uncertainty[hit], TRUNCATION_SAFETY * abs(a - b))
+            confirmed += len(left)
+    for name in fields:
+        setattr(out, name, np.concatenate([getattr(out, name)[keep], getattr(fine, name)[take]]))
+    out.partner = [p for p, k in zip(out.partner, keep, strict=True) if k] + [
+        p for p, t in zip(fine.partner, take, strict=True) if t
+    ]
+    out.related = [r for r, k in zip(out.related, keep, strict=True) if k] + [
+        r for r, t in zip(fine.related, take, strict=True) if t
+    ]
+    out.split_gap = _split_gaps(out.exponents, finer.indices, system.omega)
+    out.info["confirmed"] = {
+        "order": finer.order,
+        "clusters": int(centres.size),
+        "replaced": replaced,
+        "confirmed": confirmed,
+    }
+    return out

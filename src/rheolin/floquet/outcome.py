@@ -1,0 +1,45 @@
+"""What a lattice search returns: the representatives and their diagnostics."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["LatticeExponents"]
+
+
+@dataclass
+class LatticeExponents:
+    """Representatives of the Floquet exponents on a lattice, with their diagnostics.
+
+    ``exponents`` holds one copy per exponent (the one centred on harmonic 0, not folded),
+    the conjugates included; the other arrays are aligned with it.
+    """
+
+    exponents: np.ndarray
+    bounds: np.ndarray
+    truncation: np.ndarray
+    edge: np.ndarray
+    centroid: np.ndarray
+    dominant: np.ndarray
+    partner: list[tuple[int, int, int]]
+    expected: int
+    averaged: np.ndarray
+    averaged_tol: np.ndarray
+    split_gap: np.ndarray
+    certified: np.ndarray
+    centre: np.ndarray
+    unresolved: np.ndarray
+    order: np.ndarray
+    uncertainty: np.ndarray
+    liouville: tuple[float, float]
+    info: dict[str, Any] = field(default_factory=dict)
+    related: list[list[complex]] = field(default_factory=list)
+    radius: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def complete(self) -> bool:
+        """True when as many exponents were found as the averaged system has."""
+        return bool(self.exponents.size >= self.expected)

@@ -1,0 +1,237 @@
+"""The result of a Floquet computation and its verdict (``decided``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..lattice import Lattice
+
+__all__ = [
+    "DECIDE_SAFETY",
+    "EDGE_TOL",
+    "REL_FLOOR",
+    "SAFETY",
+    "SPLIT_FACTOR",
+    "TRUNCATION_SAFETY",
+    "FloquetResult",
+]
+
+
+#: An exponent is called unstable only when its real part exceeds this many error bounds.
+SAFETY = 100.0
+
+
+#: Relative floor of the per-exponent tolerance (times ``max(|lambda|, w1)``).
+REL_FLOOR = 1e-10
+
+
+#: Energy fraction allowed at the outermost harmonics for a converged representative.
+EDGE_TOL = 1e-6
+
+
+#: Safety factor on the truncation-error estimate ``sqrt(edge_weight) max(|lambda|, w1)``.
+DECIDE_SAFETY = 10.0
+
+
+#: ... widened by this factor for exponents that may be one of a pair about to split.
+SPLIT_FACTOR = 4.0
+
+
+#: Lattice path: an exponent is decided when ``|Re|`` exceeds this many truncation estimates.
+TRUNCATION_SAFETY = 10.0
+
+
+_EPS = float(np.finfo(float).eps)
+
+
+@dataclass
+class FloquetResult:
+    """Floquet exponents of the homogeneous system ``M q'' + D q' + K q = 0``.
+
+    Attributes
+    ----------
+    exponents
+        One representative per exponent (``2 n`` of them for a nonsingular ``M_0`` with the
+        dense method; those found near the imaginary axis with the sparse one), imaginary
+        part in ``(-omega/2, omega/2]``, sorted by decreasing real part.
+    max_real
+        Largest real part [1/s].
+    stable
+        True when no exponent has a real part above its own tolerance.
+    marginal
+        True when stable and some exponent has a real part of zero within its tolerance
+        (undamped or rigid-body motion, bounded or linearly growing).
+    tol
+        Largest per-exponent tolerance (``tolerances.max()``) [1/s].
+    omega
+        Base angular frequency of the system.
+    tolerances
+        Per-exponent tolerance: ``SAFETY`` times the first-order error bound
+        ``eps (||A|| + |lambda| ||B||) / |y^H B x|`` (left/right eigenvectors ``y``, ``x`` of
+        the balanced pencil), at least ``REL_FLOOR * max(|lambda|, omega)``. Multiple or
+        ill-conditioned exponents (rigid-body modes, band edges) get wide tolerances.
+    edge_weight
+        Energy fraction of each representative's eigenvector in the outermost harmonics of
+        the truncation; small means converged in the truncation.
+    converged
+        True when every representative has ``edge_weight <= EDGE_TOL``.
+    decided
+        True when the truncation cannot change the verdict: every representative that is not
+        converged lies far enough from the imaginary axis, ``|Re| > DECIDE_SAFETY
+        sqrt(edge_weight) max(|lambda|, omega)`` (an estimate of its truncation error with a
+        safety factor of 10), on the side of the verdict; four times that estimate for an
+        exponent within it of ``Im = 0`` or ``w1 / 2``, where a complex pair can split into
+        a growing real pair (checked on a scan of the damped Mathieu equation). Heavily
+        damped high modes that need more harmonics do not make a stability verdict uncertain.
+    method
+        ``"dense"`` or ``"sparse"``.
+    band
+        Sparse method: every exponent with ``|Re| <= band`` in the searched frequency range
+        was found (``inf`` for dense).
+    info
+        Method details (shifts, factorizations, timings, lattice size and memory estimate).
+    truncation
+        Lattice method: per-exponent estimate of the truncation error [1/s], the
+        second-order correction from the harmonics just outside the lattice. An exponent's
+        verdict is decided when ``|Re| > TRUNCATION_SAFETY x truncation``. Empty otherwise.
+    complete
+        Lattice method: as many exponents were found as the time-averaged system has.
+    lattice
+        Lattice method: the :class:`~rheolin.lattice.Lattice` of the truncation.
+    dominant
+        Lattice method: for each exponent, the index of the time-averaged mode (in
+        ``averaged``) that carries most of its eigenvector at harmonic 0.
+    partner
+        Lattice method: for each exponent, what it resonates with: ``(shift, mode_a,
+        mode_b)``, the time-averaged modes (indices into ``averaged``) dominating its
+        eigenvector at two harmonics ``shift`` apart (a mode and its own conjugate for a
+        parametric resonance, ``2 w_a ~ |shift| w1``).
+    averaged
+        Lattice method: the exponents of the time-averaged system.
+    averaged_tol
+        Lattice method: their tolerances (as ``tolerances``).
+
+    Notes
+    -----
+    The dense and sparse methods fold every exponent into ``(-omega/2, omega/2]``. The
+    lattice method keeps the copy centred on harmonic 0, whose imaginary part is the modal
+    frequency: ``omega`` is input speed / 4757 for a hunting-tooth gearbox, and folding into
+    a band of 0.07 rad/s would say nothing.
+    """
+
+    exponents: np.ndarray
+    max_real: float
+    stable: bool
+    marginal: bool
+    tol: float
+    omega: float
+    tolerances: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    edge_weight: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    converged: bool = True
+    method: str = "dense"
+    band: float = float("inf")
+    info: dict[str, Any] = field(default_factory=dict)
+    truncation: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    complete: bool = True
+    lattice: Lattice | None = None
+    dominant: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    partner: list[tuple[int, int, int]] = field(default_factory=list)
+    averaged: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=complex))
+    averaged_tol: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def decided(self) -> bool:
+        """See the class docstring."""
+        if self.method == "lattice":
+            return self._decided_lattice()
+        if self.converged or self.exponents.size == 0:
+            return True
+        lam = self.exponents
+        weight = self.edge_weight if self.edge_weight.size == lam.size else np.ones(lam.size)
+        loose = weight > EDGE_TOL
+        reach = DECIDE_SAFETY * np.sqrt(weight) * np.maximum(np.abs(lam), self.omega)
+        # an exponent near Im = 0 or w1/2 may be one of a pair about to split into a real pair
+        half = 0.5 * self.omega
+        edge_gap = np.abs(lam.imag / half - np.round(lam.imag / half)) * half
+        near_split = edge_gap < reach
+        if not self.stable:
+            # unstable for sure when a converged (or clearly growing) exponent says so
+            sure = (lam.real > self.tolerances) & (~loose | (lam.real > reach))
+            return bool(sure.any())
+        clear = np.where(near_split, lam.real + SPLIT_FACTOR * reach < 0, lam.real + reach < 0)
+        return bool(np.all(~loose | clear))
+
+    def _decided_lattice(self) -> bool:
+        if not self.complete:
+            return False
+        lam, tol = self.exponents, self.tolerances
+        reach = TRUNCATION_SAFETY * self.truncation
+        # Liouville: the real parts of all 2 n exponents sum to -mean tr(M^-1 D); a truncation
+        # that moved exponents more than their estimates say shows here
+        target, unc = self.info.get("liouville", (float("nan"), float("inf")))
+        if np.isfinite(target):
+            spread = self.info.get("uncertainty", reach)
+            slack = float(np.sum(spread) + np.sum(tol)) + unc + 1e-10 * float(np.sum(np.abs(lam)))
+            total = float(np.sum(lam.real))
+            # modes certified by their Gershgorin discs were not computed: each pair counts
+            # with its time-averaged real part, within its radius
+            skipped = self.info.get("certified_modes", np.zeros(0, complex))
+            radii = self.info.get("certified_radii", np.zeros(0))
+            pair = np.where(np.abs(skipped.imag) > 0, 2.0, 1.0)
+            total += float(np.sum(pair * skipped.real))
+            slack += float(np.sum(pair * radii))
+            if abs(total - target) > slack:
+                return False
+        if not self.stable:
+            sure = (lam.real > tol + reach) & ~self.info.get("unresolved", np.zeros(lam.size, bool))
+            return bool(np.any(sure))
+        gap = self.info.get("split_gap", np.full(lam.size, np.inf))
+        near_split = gap < 2.0 * reach
+        loose = self.truncation > tol
+        unresolved = self.info.get("unresolved", np.zeros(lam.size, bool))
+        certified = self.info.get("certified", np.zeros(lam.size, bool))
+        if np.any(unresolved & ~certified):
+            return False
+        split_clear = lam.real + SPLIT_FACTOR * (reach + gap) < 0
+        clear = np.where(near_split, split_clear, lam.real + reach < 0)
+        return bool(np.all(~loose | clear | certified))
+
+    @property
+    def leading(self) -> complex:
+        """The exponent with the largest real part (``nan`` when none was found)."""
+        return complex(self.exponents[0]) if self.exponents.size else complex("nan")
+
+
+def _result(
+    reps: np.ndarray,
+    bounds: np.ndarray,
+    edges: np.ndarray,
+    w: float,
+    method: str,
+    band: float = float("inf"),
+    info: dict[str, Any] | None = None,
+) -> FloquetResult:
+    tol_i = np.maximum(SAFETY * bounds, REL_FLOOR * np.maximum(np.abs(reps), w))
+    order = np.argsort(-reps.real, kind="stable")
+    reps, tol_i, edges = reps[order], tol_i[order], edges[order]
+    unstable = reps.real > tol_i
+    near_zero = np.abs(reps.real) <= tol_i
+    max_real = float(reps.real.max()) if reps.size else float("-inf")
+    stable = not bool(unstable.any())
+    return FloquetResult(
+        exponents=reps,
+        max_real=max_real,
+        stable=stable,
+        marginal=bool(stable and near_zero.any()),
+        tol=float(tol_i.max()) if tol_i.size else REL_FLOOR * w,
+        omega=w,
+        tolerances=tol_i,
+        edge_weight=edges,
+        converged=bool(np.all(edges <= EDGE_TOL)),
+        method=method,
+        band=band,
+        info=info or {},
+    )

@@ -1,0 +1,442 @@
+"""The lattice search: shift-invert Arnoldi near every cluster of time-averaged modes
+(docs/stability.md).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+import scipy.sparse.linalg as spla
+
+from ..hill import hill_pencil
+from ..hill_lattice import LatticeHill
+from ..lattice import Lattice
+from ..system import PeriodicSystem
+from .averaged import _Averaged
+from .checks import _gershgorin, _Outer, _split_gaps, liouville_sum
+from .outcome import LatticeExponents
+from .result import _EPS, SAFETY, TRUNCATION_SAFETY
+from .select import ACCEPT_WEIGHT, CENTRED, _Candidate, _clusters, _count, _select
+
+__all__ = ["ARNOLDI_STEPS", "ARNOLDI_TOL", "SPLU", "UNRESOLVED_EDGE", "lattice_exponents"]
+
+
+#: A representative with more energy than this on the outer shell is not resolved by the
+#: truncation: its verdict comes from the Gershgorin discs of its modes.
+UNRESOLVED_EDGE = 0.1
+
+
+#: SuperLU options for the lattice operator: column AMD with threshold pivoting that prefers
+#: the diagonal (half the fill of partial pivoting on the gearbox; the Newton step on each
+#: representative uses Q itself, so the factor's accuracy does not limit the exponents).
+SPLU: dict[str, Any] = {"permc_spec": "COLAMD", "diag_pivot_thresh": 0.1}
+
+
+#: Arnoldi: checkpoints (basis sizes) and the relative residual of an accepted Ritz pair.
+ARNOLDI_STEPS = (10, 16, 24, 36, 54)
+
+
+ARNOLDI_TOL = 1e-10
+
+
+def lattice_exponents(
+    system: PeriodicSystem,
+    lattice: Lattice,
+    *,
+    near: np.ndarray | None = None,
+) -> LatticeExponents:
+    """Representatives of the Floquet exponents of ``system`` on ``lattice``.
+
+    See the module docstring for the method. ``near`` restricts the search to the
+    time-averaged modes nearest these values (for tracking one exponent across speeds); the
+    result is then partial (``expected`` is the number of those modes).
+    """
+    t0 = time.perf_counter()
+    n, w = system.n, system.omega
+    H = lattice.indices
+    nh = H.size
+    if 0 not in set(H.tolist()):
+        raise ValueError("the lattice must contain harmonic 0")
+    avg = _Averaged(system)
+    hill = LatticeHill(system, H)
+    sq_rep, sv_rep = np.tile(avg.sq, nh), np.tile(avg.sv, nh)
+    Mconv = hill.inner.Mconv()
+    centre = lattice.position(0)
+    shell = lattice.shell.astype(float)
+    boundary = lattice.boundary
+    lam0 = avg.lam
+    scale0 = np.maximum(np.abs(lam0), w)
+    upper = np.flatnonzero(lam0.imag >= -1e-9 * scale0)
+    if near is not None:
+        picks = {int(np.argmin(np.abs(lam0 - z))) for z in np.atleast_1d(near)}
+        picks = {
+            j
+            if lam0[j].imag >= -1e-9 * scale0[j]
+            else int(np.argmin(np.abs(lam0 - np.conj(lam0[j]))))
+            for j in picks
+        }
+        upper = np.array(sorted(picks), dtype=int)
+    targets = upper[np.argsort(lam0[upper].imag, kind="stable")]
+    size = 2 * n * nh
+    pool: list[_Candidate] = []
+    shifts: list[complex] = []
+    lu_seconds = 0.0
+    arnoldi_seconds = 0.0
+    rng = np.random.default_rng(12345)
+
+    def to_unbalanced(yb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return yb[: n * nh] / sq_rep, yb[n * nh :] / sv_rep
+
+    def candidate(yb: np.ndarray, lam: complex, shift: int) -> _Candidate:
+        with np.errstate(under="ignore"):
+            e2 = np.abs(yb) ** 2
+        e = e2[: n * nh].reshape(nh, n).sum(axis=1) + e2[n * nh :].reshape(nh, n).sum(axis=1)
+        tot = e.sum()
+        e = e / tot if tot > 0 else e
+        top = np.argsort(-e, kind="stable")[:2]
+
+        def block(i: int) -> np.ndarray:
+            return np.concatenate(
+                [yb[i * n : (i + 1) * n], yb[n * nh + i * n : n * nh + (i + 1) * n]]
+            )
+
+        mw = np.abs(avg.WB @ block(centre))
+        dom = int(np.argmax(mw))
+        # rounding scatter: that of the averaged mode carrying the most energetic harmonic
+        mt = np.abs(avg.WB @ block(int(top[0])))
+        at_top = int(np.argmax(mt))
+        # the clusters it may stand for: modes carrying its energy at 0 or at its top harmonic
+        share = np.maximum(mw / max(mw.max(), 1e-300), mt / max(mt.max(), 1e-300))
+        fam: list[int] = []
+        for m in np.argsort(-share, kind="stable"):
+            if share[m] < ACCEPT_WEIGHT:
+                break
+            f = int(family_of[m])
+            if f >= 0 and f not in fam:
+                fam.append(f)
+        return _Candidate(
+            complex(lam),
+            yb,
+            e,
+            float(shell @ e),
+            float(e[boundary].sum()),
+            (int(H[top[0]]), int(H[top[-1]])),
+            dom,
+            shift,
+            mw / mw[dom] if mw[dom] > 0 else mw,
+            SAFETY * float(avg.bound[at_top]),
+            tuple(fam),
+        )
+
+    def share(c: _Candidate, cid: int) -> float:
+        """Energy fraction of the cluster's modes (and their conjugates) over all harmonics."""
+        blocks = np.concatenate(
+            [c.y[: n * nh].reshape(nh, n), c.y[n * nh :].reshape(nh, n)], axis=1
+        )
+        modal = np.abs(blocks @ avg.WB.T) ** 2
+        mine = np.flatnonzero(family_of == cid)
+        total = modal.sum()
+        return float(modal[:, mine].sum() / total) if total > 0 else 0.0
+
+    def search(cid: int) -> list[_Candidate]:
+        """Exponents of one cluster of (nearly) equal averaged exponents, centred copies."""
+        nonlocal lu_seconds, arnoldi_seconds
+        cluster = clusters[cid]
+        sigma = complex(np.mean(lam0[cluster]))
+        need = quotas[cid]
+        t1 = time.perf_counter()
+        lu = _factor(hill, sigma, w)
+        sigma = lu.sigma
+        lu_seconds += time.perf_counter() - t1
+        P = hill.inner.P(sigma, w)
+        S = hill.s(sigma)
+
+        def apply(yb: np.ndarray) -> np.ndarray:
+            # balanced (A - sigma B)^-1 B y through one solve with Q(sigma)
+            xq, xv = to_unbalanced(yb)
+            q = -lu.solve(np.asarray(Mconv @ xv + P @ xq))
+            return np.concatenate([q * sq_rep, (xq + S * q) * sv_rep])
+
+        v0 = np.zeros(size, dtype=complex)
+        mix = rng.standard_normal(cluster.size) + 1j * rng.standard_normal(cluster.size)
+        v0[centre * n : (centre + 1) * n] = avg.X[:n, cluster] @ mix
+        v0[n * nh + centre * n : n * nh + (centre + 1) * n] = avg.X[n:, cluster] @ mix
+        # a little of everything: an exact eigenvector would end the Krylov space at once
+        v0 += 1e-3 * (rng.standard_normal(size) + 1j * rng.standard_normal(size)) / np.sqrt(size)
+        t2 = time.perf_counter()
+        shifts.append(sigma)
+        found_here: list[_Candidate] = []
+
+        def accept(theta: np.ndarray, vecs: np.ndarray) -> bool:
+            found_here.clear()
+            lam = sigma + 1.0 / theta
+            for i in range(theta.size):
+                found_here.append(candidate(vecs[:, i], lam[i], len(shifts) - 1))
+            mine = [c for c in found_here if c.centroid <= CENTRED and cid in c.families]
+            satisfied[0] = _count(_select(mine, {cid: need}, w, nh)) >= need
+            return satisfied[0]
+
+        satisfied = [False]
+        _arnoldi(apply, v0, accept, steps=ARNOLDI_STEPS, tol=ARNOLDI_TOL)
+        arnoldi_seconds += time.perf_counter() - t2
+        for c in found_here:
+            c.search = cid
+        if not satisfied[0]:
+            short.append(sigma)
+        return found_here
+
+    short: list[complex] = []
+    clusters = _clusters(lam0, targets, w)
+    quotas = {
+        i: sum(1 if abs(lam0[c].imag) <= 1e-9 * scale0[c] else 2 for c in cl)
+        for i, cl in enumerate(clusters)
+    }
+    family_of = np.full(lam0.size, -1, dtype=int)
+    for i, cl in enumerate(clusters):
+        family_of[cl] = i
+    for m in np.flatnonzero(family_of < 0):  # the conjugates stand for their targets
+        family_of[m] = family_of[int(np.argmin(np.abs(lam0 - np.conj(lam0[m]))))]
+    # clusters whose Gershgorin discs lie left of the axis need no search: none of their
+    # exponents can be unstable (every exponent lies in the union of the discs)
+    discs = np.zeros(lam0.size)
+    skipped: list[int] = []
+    if near is None and lam0.size:
+        upper_modes = [int(m) for cl in clusters for m in cl]
+        discs[upper_modes] = _gershgorin(system, avg, upper_modes)
+        for cid, cl in enumerate(clusters):
+            if np.all(lam0[cl].real + discs[cl] < -1e-6 * np.maximum(np.abs(lam0[cl]), w)):
+                skipped.append(cid)
+                quotas[cid] = 0
+    for cid in range(len(clusters)):
+        if cid not in skipped:
+            pool.extend(search(cid))
+
+    expected = int(sum(quotas.values()))
+    reps = _select(pool, quotas, w, nh, share=share)
+    # left eigenvectors, error bounds and truncation estimates of the representatives
+    A_b, B_b = hill_pencil(system, H)
+    normA, normB = spla.norm(A_b, 1), spla.norm(B_b, 1)
+    del A_b
+    lams, bounds, trunc, edges, cents, doms, partners = [], [], [], [], [], [], []
+    certified: list[bool] = []
+    centres: list[complex] = []
+    spread: list[float] = []
+    related: list[list[complex]] = []
+    radii: list[float] = []
+    conj_index = _conjugate_index(lam0)
+    outer = _Outer(hill, avg) if nh > 0 else None
+    radius: dict[int, float] = {}
+    for c, conj_too in reps:
+        # a representative the truncation does not resolve (its energy on the outer shells,
+        # or taken only to fill its cluster) is judged by the Gershgorin discs of its modes
+        unresolved = c.forced or c.edge > UNRESOLVED_EDGE
+        ok = False
+        if unresolved:
+            modes = np.flatnonzero(family_of == c.search) if c.search >= 0 else np.zeros(0, int)
+            need_r = [int(m) for m in modes if int(m) not in radius]
+            if need_r:
+                radius.update(zip(need_r, _gershgorin(system, avg, need_r), strict=True))
+            ok = bool(modes.size) and all(lam0[m].real + radius[int(m)] < 0 for m in modes)
+        disc = max((radius[int(m)] for m in modes), default=0.0) if unresolved and ok else 0.0
+        xq, _ = to_unbalanced(c.y)
+        lam_c, xq, u, yq = _polish(hill, c.lam, xq, w)
+        c.lam = lam_c
+        # first-order vectors: right (q, s q), left (P^H u, u); balanced: R^-1 x, L^-1 y
+        xb = np.concatenate([xq * sq_rep, hill.s(lam_c) * xq * sv_rep])
+        yb = np.concatenate([yq / sq_rep, u * sv_rep])
+        denom = abs(np.vdot(yb, B_b @ xb))
+        nx, ny = np.linalg.norm(xb), np.linalg.norm(yb)
+        bound = _EPS * (normA + abs(lam_c) * normB) * nx * ny / max(denom, np.finfo(float).tiny)
+        tau = outer.estimate(lam_c, xq, u) if outer is not None else 0.0
+        part = _partner(c, H, n, avg.WB, conj_index)
+        for lam_i in [c.lam, np.conj(c.lam)] if conj_too else [c.lam]:
+            lams.append(complex(lam_i))
+            bounds.append(bound)
+            trunc.append(tau)
+            edges.append(c.edge)
+            cents.append(c.centroid)
+            doms.append(c.dominant if lam_i == c.lam else conj_index[c.dominant])
+            partners.append(
+                part
+                if lam_i == c.lam
+                else (-part[0], int(conj_index[part[1]]), int(conj_index[part[2]]))
+            )
+            certified.append(ok if unresolved else False)
+            spread.append(max(TRUNCATION_SAFETY * tau, disc))
+            members = clusters[c.home] if c.home >= 0 else np.zeros(0, int)
+            mid = complex(np.mean(lam0[members])) if members.size else complex("nan")
+            centres.append(mid if lam_i == c.lam else complex(np.conj(mid)))
+            related.append(
+                [complex(np.mean(lam0[clusters[f]])) for f in c.families if f < len(clusters)]
+            )
+            radii.append(float(discs[members].max()) if members.size else np.inf)
+    info = {
+        "lattice_size": nh,
+        "lattice_order": lattice.order,
+        "hill_size": size,
+        "shifts": len(shifts),
+        "lu_seconds": lu_seconds,
+        "arnoldi_seconds": arnoldi_seconds,
+        "seconds": time.perf_counter() - t0,
+        "short_searches": [complex(x) for x in short],
+        "certified_modes": np.concatenate(
+            [lam0[clusters[c]] for c in skipped] + [np.zeros(0, complex)]
+        ),
+        "certified_radii": np.concatenate([discs[clusters[c]] for c in skipped] + [np.zeros(0)]),
+    }
+    return LatticeExponents(
+        exponents=np.array(lams, dtype=complex),
+        bounds=np.array(bounds, dtype=float),
+        truncation=np.array(trunc, dtype=float),
+        edge=np.array(edges, dtype=float),
+        centroid=np.array(cents, dtype=float),
+        dominant=np.array(doms, dtype=int),
+        partner=partners,
+        expected=expected,
+        averaged=lam0,
+        averaged_tol=np.maximum(SAFETY * avg.bound, 1e-10 * np.maximum(np.abs(lam0), w)),
+        split_gap=_split_gaps(np.array(lams, dtype=complex), H, w),
+        certified=np.array(certified, dtype=bool),
+        centre=np.array(centres, dtype=complex),
+        order=np.full(len(lams), lattice.order, dtype=int),
+        related=related,
+        radius=np.array(radii, dtype=float),
+        uncertainty=np.array(spread, dtype=float),
+        unresolved=np.array(
+            [c.forced or c.edge > UNRESOLVED_EDGE for c, cj in reps for _ in range(2 if cj else 1)],
+            dtype=bool,
+        ),
+        liouville=liouville_sum(system),
+        info=info,
+    )
+
+
+def _arnoldi(
+    apply: Any, v0: np.ndarray, accept: Any, *, steps: tuple[int, ...], tol: float
+) -> None:
+    """Arnoldi on ``apply`` from ``v0`` (no restarts); at each checkpoint the converged Ritz
+    pairs (residual ``<= tol |theta|``) are passed to ``accept(theta, vectors)``, which says
+    whether to stop."""
+    m_max = steps[-1]
+    size = v0.size
+    m_max = min(m_max, size)
+    V = np.empty((m_max + 1, size), dtype=complex)
+    Hm = np.zeros((m_max + 1, m_max), dtype=complex)
+    V[0] = v0 / np.linalg.norm(v0)
+    checkpoints = {min(s, m_max) for s in steps}
+    for j in range(m_max):
+        wv = apply(V[j])
+        basis = V[: j + 1]
+        h = np.conj(basis @ np.conj(wv))
+        wv = wv - h @ basis
+        h2 = np.conj(basis @ np.conj(wv))  # second Gram-Schmidt pass
+        wv = wv - h2 @ basis
+        Hm[: j + 1, j] = h + h2
+        beta = float(np.linalg.norm(wv))
+        Hm[j + 1, j] = beta
+        m = j + 1
+        ended = beta <= 1e-14 * float(np.abs(Hm[: j + 2, : j + 1]).max())
+        if not ended:
+            V[j + 1] = wv / beta
+        if m in checkpoints or ended or m == m_max:
+            theta, Svec = np.linalg.eig(Hm[:m, :m])
+            res = beta * np.abs(Svec[-1, :]) if not ended else np.zeros(m)
+            good = res <= tol * np.abs(theta)
+            if good.any():
+                vecs = V[:m].T @ Svec[:, good]
+                if accept(theta[good], vecs) or ended:
+                    return
+            if ended:
+                return
+
+
+class _Shifted:
+    """A sparse LU of ``Q(sigma)`` that remembers its (possibly nudged) shift."""
+
+    def __init__(self, lu: Any, sigma: complex) -> None:
+        self.lu = lu
+        self.sigma = sigma
+
+    def solve(self, b: np.ndarray, trans: str = "N") -> np.ndarray:
+        return np.asarray(self.lu.solve(b, trans=trans))
+
+
+def _factor(hill: LatticeHill, sigma: complex, w: float) -> _Shifted:
+    """LU of ``Q(sigma)``; an exactly singular shift is moved slightly."""
+    scale = max(abs(sigma), w)
+    if abs(sigma) < 1e-9 * w:
+        sigma = complex(1e-4 * w, 1e-4 * w)
+    for attempt in range(4):
+        try:
+            return _Shifted(spla.splu(hill.Q(sigma), **SPLU), sigma)
+        except RuntimeError:  # exactly singular
+            sigma += 1e-7 * scale * (1 + 1j) * 10**attempt
+    raise RuntimeError(f"cannot factorize the lattice Hill operator near {sigma}")
+
+
+def _polish(
+    hill: LatticeHill, lam: complex, q: np.ndarray, w: float
+) -> tuple[complex, np.ndarray, np.ndarray, np.ndarray]:
+    """One LU at the exponent: inverse iteration for the right and left null vectors of
+    ``Q(lam)`` and a two-sided Newton (Rayleigh functional) step on ``lam``.
+
+    Returns ``(lam, q, u, P(lam)^H u)``.
+    """
+    lu = _factor(hill, lam, w)
+    dQ = hill.inner.dQ(lam, w)
+    q1 = lu.solve(np.asarray(dQ @ q))
+    q1 /= np.linalg.norm(q1)
+    u = lu.solve(np.asarray(dQ.conj().T @ q1), trans="H")  # a start for the left vector
+    u /= np.linalg.norm(u)
+    u = lu.solve(np.asarray(dQ.conj().T @ u), trans="H")
+    u /= np.linalg.norm(u)
+    num = np.vdot(u, hill.Q(lam) @ q1)
+    den = np.vdot(u, dQ @ q1)
+    if den != 0 and np.isfinite(num / den) and abs(num / den) < 1e-4 * max(abs(lam), w):
+        lam = lam - num / den
+    P = hill.inner.P(lam, w)
+    return complex(lam), q1, u, np.asarray(P.conj().T @ u)
+
+
+def _partner(
+    c: _Candidate, H: np.ndarray, n: int, WB: np.ndarray, conj: np.ndarray
+) -> tuple[int, int, int]:
+    """What a representative resonates with: ``(shift, mode_a, mode_b)``, the time-averaged
+    mode ``mode_a`` dominating the eigenvector at one harmonic and ``mode_b`` at another
+    ``shift`` harmonics away (``(0, -1, -1)`` without one).
+
+    Among the harmonics holding at least 1 % of the largest energy, a parametric resonance
+    pairs a mode with its own conjugate (``2 w_j ~ shift w1``): the most energetic such pair
+    is taken. Otherwise (a combination of two modes) the two most energetic harmonics are.
+    The harmonics in between (the non-resonant steps of a secondary resonance, or a
+    representative whose energy sits off harmonic 0) are passed over.
+    """
+    nh = H.size
+    order = [int(i) for i in np.argsort(-c.energy, kind="stable")]
+    top = c.energy[order[0]]
+    big = [i for i in order if c.energy[i] >= 1e-2 * top]
+    if len(big) < 2:
+        return 0, -1, -1
+
+    def mode_at(i: int) -> int:
+        yh = np.concatenate([c.y[i * n : (i + 1) * n], c.y[n * nh + i * n : n * nh + (i + 1) * n]])
+        return int(np.argmax(np.abs(WB @ yh)))
+
+    modes = {i: mode_at(i) for i in big}
+    best: tuple[float, int, int] | None = None
+    for a in big:
+        for b in big:
+            if b != a and conj[modes[a]] == modes[b] and H[b] != H[a]:
+                score = float(c.energy[a] + c.energy[b])
+                if best is None or score > best[0]:
+                    best = (score, a, b)
+    a, b = (best[1], best[2]) if best is not None else (big[0], big[1])
+    return int(H[b] - H[a]), modes[a], modes[b]
+
+
+def _conjugate_index(lam: np.ndarray) -> np.ndarray:
+    """For each eigenvalue, the index of its conjugate (itself when real); ``-1`` maps to -1."""
+    idx = np.array([int(np.argmin(np.abs(lam - np.conj(x)))) for x in lam], dtype=int)
+    return np.append(idx, -1)

@@ -1,0 +1,308 @@
+"""A model assembled once for every speed: :class:`SpeedTemplate`.
+
+The input speed enters the periodic system only through ``w1 = base_ratio * speed``, and every
+coefficient is a polynomial of degree <= 2 in ``w1`` (gyroscopic and circulatory terms are
+linear, centripetal ones quadratic, DESIGN.md §5) whose harmonic indices do not depend on the
+speed. The template reads the model once, sums every element's
+:class:`~rheolin.mechanics._term.SpeedTerm` into one CSR pattern per (matrix, harmonic) with one
+row of values per power of ``w1``, and at each speed forms ``X^(0) + w1 X^(1) + w1^2 X^(2)`` on
+those patterns: one vector operation per coefficient instead of rebuilding the elements.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import ModelError
+from ..system import PeriodicSystem
+from ._term import SpeedTerm, Term
+from .assembly import Assembled
+from .beam import beam_body_matrices, beam_speed_term
+from .gears import gear_mesh_term, line_of_action
+from .joints import COMPONENTS, coupling_speed_term
+from .loads import gravity_load, harmonic_force_term
+from .speeds import SpeedPlan, propagate_speeds, speed_plan
+
+if TYPE_CHECKING:
+    from .model import Model
+
+__all__ = ["SpeedTemplate", "assemble_model", "model_speed_plan"]
+
+_POWERS = 3  # w1^0, w1^1, w1^2
+
+
+class _Coefficient:
+    """``X_k(w1)`` for every harmonic ``k >= 0`` of one matrix, on fixed CSR patterns."""
+
+    def __init__(self, name: str, n: int) -> None:
+        self.name, self.n = name, n
+        self._parts: dict[int, list[tuple[np.ndarray, np.ndarray, int, np.ndarray]]] = {}
+        self.patterns: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+
+    def add(self, dofs: np.ndarray, powers: dict[int, dict[int, np.ndarray]]) -> None:
+        d = dofs.size
+        rows, cols = np.repeat(dofs, d), np.tile(dofs, d)
+        for p, series in powers.items():
+            if not 0 <= p < _POWERS:
+                raise ModelError(f"term `{self.name}`: power {p} of w1 is not in 0..2")
+            for k, x in series.items():
+                x = np.asarray(x)
+                if x.shape != (d, d):
+                    raise ModelError(
+                        f"term `{self.name}[{k}]` must have shape ({d}, {d}), got {x.shape}"
+                    )
+                if k >= 0:
+                    self._parts.setdefault(int(k), []).append((rows, cols, p, x.ravel()))
+
+    def freeze(self) -> None:
+        """Sum the parts into one CSR pattern per harmonic with a value row per power."""
+        for k, parts in sorted(self._parts.items()):
+            keys = np.concatenate([r * self.n + c for r, c, _, _ in parts])
+            union, slot = np.unique(keys, return_inverse=True)
+            values = np.zeros((_POWERS, union.size), dtype=float if k == 0 else complex)
+            start = 0
+            for _, _, p, v in parts:
+                stop = start + v.size
+                np.add.at(values[p], slot[start:stop], v.real if k == 0 else v)
+                start = stop
+            rows, cols = union // self.n, union % self.n
+            self.patterns[k] = (rows, cols, values)
+        self._parts = {}
+
+    def at(self, w1: float) -> dict[int, sp.csr_array]:
+        """The coefficients ``{k: X_k}`` (``k >= 0``) at ``w1``; exact zeros dropped."""
+        out: dict[int, sp.csr_array] = {}
+        for k, (rows, cols, (x0, x1, x2)) in self.patterns.items():
+            data = x0 + w1 * x1 + (w1 * w1) * x2
+            keep = data != 0
+            if not keep.any():
+                continue
+            r, c, v = (rows, cols, data) if keep.all() else (rows[keep], cols[keep], data[keep])
+            indptr = np.zeros(self.n + 1, dtype=np.int64)
+            np.cumsum(np.bincount(r, minlength=self.n), out=indptr[1:])
+            out[k] = sp.csr_array((v, c, indptr), shape=(self.n, self.n))
+        return out
+
+
+class SpeedTemplate:
+    """A :class:`~rheolin.mechanics.model.Model` assembled once, evaluated at any speed.
+
+    The model is read when the template is made: change the model, make a new template.
+
+    Examples
+    --------
+    >>> from rheolin.mechanics.model import Model
+    >>> m = Model()
+    >>> m.add_shaft("s", [0.0, 0.5, 1.0], outer_diameter=0.05)
+    >>> m.add_disk("s", 1, outer_diameter=0.3, width=0.05, unbalance=1e-4)
+    >>> m.add_bearing("a", "s", 0, 1e7, 1e2); m.add_bearing("b", "s", 2, 1e7, 1e2)
+    >>> t = SpeedTemplate(m)
+    >>> a = t.assemble(300.0)
+    >>> a.omega, a.system.load_harmonics
+    (300.0, [-1, 1])
+    >>> b = m.assemble(300.0)
+    >>> bool(abs(a.system.D[0] - b.system.D[0]).max() <= 1e-12 * abs(b.system.D[0]).max())
+    True
+    """
+
+    def __init__(self, model: Model) -> None:
+        plan = model_speed_plan(model)
+        self.plan = plan
+        self.node_index: dict[tuple[str, int], int] = {}
+        self.dof_labels: list[tuple[str, int, str]] = []
+        for b in model.bodies.values():
+            for i in range(len(b.positions)):
+                self.node_index[(b.name, i)] = len(self.node_index)
+                self.dof_labels += [(b.name, i, c) for c in COMPONENTS]
+        self.n_dof = 6 * len(self.node_index)
+        self.modal_dofs: dict[str, np.ndarray] = {}
+        for b in model.bodies.values():  # modal DOFs of condensed bodies after every node
+            modes = b.data["condensed"].n_modes if b.kind == "condensed" else 0
+            if modes:
+                self.modal_dofs[b.name] = self.n_dof + np.arange(modes)
+                self.dof_labels += [(b.name, -1 - j, "mode") for j in range(modes)]
+                self.n_dof += modes
+        dof = {key: 6 * v + np.arange(6) for key, v in self.node_index.items()}
+        terms = self._body_terms(model)
+        self.joints: dict[str, SpeedTerm] = {}
+        for name, j in model.joints.items():
+            other = None if j["other"][0] is None else dof[j["other"]]
+            frame = j["frame"]
+            s = 0 if frame is None else plan.spin[frame]
+            axis = (0.0, 0.0, 1.0) if frame is None else model.bodies[frame].axis
+            self.joints[name] = coupling_speed_term(
+                (dof[(j["body"], j["node"])], other), j["K"], j["D"], s, axis
+            )
+        self.meshes: dict[str, tuple[Term, np.ndarray, int]] = {}
+        for (name, g), harmonic in zip(model.meshes.items(), plan.mesh, strict=True):
+            w = _mesh_vector(model, g, plan)
+            dof_a = dof[(g["pair"].pinion_body, g["pinion_node"])]
+            dof_b = dof[(g["pair"].gear_body, g["gear_node"])]
+            t = gear_mesh_term(
+                dof_a, dof_b, w, harmonic, g["stiffness"], g["damping"], g["transmission_error"]
+            )
+            self.meshes[name] = (t, w, harmonic)
+        for f in model.forces.values():
+            n = plan.harmonic(f["order"] * abs(plan.ratios[f["reference"]]))
+            term = harmonic_force_term(
+                dof[(f["body"], f["node"])], f["force"], f["moment"], n, f["phase"]
+            )
+            terms.append(SpeedTerm.constant(term))
+        terms += list(self.joints.values())
+        terms += [SpeedTerm.constant(m[0]) for m in self.meshes.values()]
+        self._collect(terms)
+        if model.gravity is not None:
+            M = self._M.at(1.0)  # the mass matrix does not depend on the speed
+            M.update({-k: x.conj() for k, x in M.items() if k})
+            for k, v in gravity_load(M, model.gravity, len(self.node_index)).items():
+                if k >= 0:
+                    self._loads.setdefault(k, np.zeros((_POWERS, self.n_dof), complex))[0] += v
+
+    def _body_terms(self, model: Model) -> list[SpeedTerm]:
+        terms: list[SpeedTerm] = []
+        for b in model.bodies.values():
+            s = self.plan.spin[b.name]
+            first = self.node_index[(b.name, 0)]
+            if b.kind == "shaft":
+                data = b.data
+                for i, (length, section) in enumerate(
+                    zip(data["lengths"], data["sections"], strict=True)
+                ):
+                    mats = beam_body_matrices(
+                        float(length), section, data["material"], b.axis, data.get("y_axis")
+                    )
+                    terms.append(beam_speed_term((first + i, first + i + 1), mats, b.axis, s))
+            elif b.kind == "condensed":
+                local = b.data["condensed"]
+                placed = replace(
+                    local,
+                    nodes=[first + i for i in local.nodes],
+                    modal_dofs=self.modal_dofs.get(b.name, ()),
+                )
+                terms.append(placed.speed_term(b.axis, s))
+            for i, rn in b.disks.items():
+                terms.append(rn.speed_term(self.node_index[(b.name, i)], b.axis, s))
+        return terms
+
+    def _collect(self, terms: list[SpeedTerm]) -> None:
+        self._M, self._D, self._K = (_Coefficient(x, self.n_dof) for x in "MDK")
+        self._loads: dict[int, np.ndarray] = {}
+        for term in terms:
+            dofs = np.asarray(term.dofs, dtype=np.int64).ravel()
+            if dofs.size and (dofs.min() < 0 or dofs.max() >= self.n_dof):
+                raise ModelError(f"term DOF indices must lie in [0, {self.n_dof}), got {dofs}")
+            self._M.add(dofs, term.M)
+            self._D.add(dofs, term.D)
+            self._K.add(dofs, term.K)
+            for p, series in term.f.items():
+                for k, vec in series.items():
+                    fk = np.asarray(vec).ravel()
+                    if fk.shape != dofs.shape:
+                        raise ModelError(
+                            f"term `f[{k}]` must have shape ({dofs.size},), got {fk.shape}"
+                        )
+                    if k >= 0:
+                        out = self._loads.setdefault(k, np.zeros((_POWERS, self.n_dof), complex))
+                        np.add.at(out[p], dofs, fk)
+        for c in (self._M, self._D, self._K):
+            c.freeze()
+
+    @property
+    def time_invariant(self) -> bool:
+        """True when no coefficient has a harmonic ``k != 0`` (at any speed)."""
+        return not any(k for c in (self._M, self._D, self._K) for k in c.patterns)
+
+    def mean_polynomials(self) -> dict[str, np.ndarray]:
+        """Dense ``X_0^(p)`` of ``M, D, K`` (shape ``(3, n, n)``, power ``p`` of ``w1`` first).
+
+        For batched solves of small time-invariant models over many speeds.
+        """
+        out = {}
+        for c in (self._M, self._D, self._K):
+            X = np.zeros((_POWERS, self.n_dof, self.n_dof))
+            if 0 in c.patterns:
+                rows, cols, values = c.patterns[0]
+                X[:, rows, cols] = values
+            out[c.name] = X
+        return out
+
+    def load_polynomials(self) -> dict[int, np.ndarray]:
+        """``{k: f_k^(p)}`` for the load harmonics ``k >= 0`` (shape ``(3, n)`` each)."""
+        return {k: v.copy() for k, v in self._loads.items()}
+
+    def system(self, w1: float) -> PeriodicSystem:
+        """The periodic system at base frequency ``w1`` [rad/s]."""
+        f: dict[int, np.ndarray] = {}
+        for k, (f0, f1, f2) in sorted(self._loads.items()):
+            v = f0 + w1 * f1 + (w1 * w1) * f2
+            if np.any(v != 0):
+                f[k] = v.real.copy() if k == 0 else v
+        return PeriodicSystem(omega=w1, M=self._M.at(w1), D=self._D.at(w1), K=self._K.at(w1), f=f)
+
+    def assemble(self, speed: float) -> Assembled:
+        """The model at input speed ``speed`` [rad/s] (> 0), as ``Model.assemble`` gives it."""
+        speed = float(speed)
+        if not np.isfinite(speed) or speed <= 0:
+            raise ModelError(f"`speed` must be a positive finite number, got {speed!r}")
+        w1 = float(self.plan.base) * speed
+        joints = {name: t.at(w1) for name, t in self.joints.items()}
+        return Assembled(
+            self.system(w1),
+            w1,
+            self.plan.base,
+            speed,
+            self.plan,
+            self.plan.generators,
+            self.dof_labels,
+            self.node_index,
+            joints,
+            self.meshes,
+        )
+
+
+def model_speed_plan(model: Model) -> SpeedPlan:
+    """Exact speed ratios, ``w1 / speed`` and integer harmonics of a :class:`Model`."""
+    if not model.bodies:
+        raise ModelError("the model has no bodies")
+    inp = model.input_body or next(iter(model.bodies))
+    if inp not in model.bodies:
+        raise ModelError(f"`input_body`: no body named {inp!r}; bodies: {list(model.bodies)}")
+    fixed = {n: b.speed_ratio for n, b in model.bodies.items() if b.speed_ratio is not None}
+    pairs = [m["pair"] for m in model.meshes.values()]
+    ratios = propagate_speeds(inp, pairs, model.bodies, fixed)
+    loads = [f["order"] * abs(ratios[f["reference"]]) for f in model.forces.values()]
+    return speed_plan(inp, pairs, model.bodies, loads, fixed)
+
+
+def assemble_model(model: Model, speed: float) -> Assembled:
+    """Assemble a :class:`Model` at input speed ``speed`` [rad/s]."""
+    return SpeedTemplate(model).assemble(speed)
+
+
+def _mesh_vector(model: Model, g: dict[str, Any], plan: SpeedPlan) -> np.ndarray:
+    """Line of action from normal module, pressure and helix angle and the node positions."""
+    p = g["pair"]
+    bp, bg = model.bodies[p.pinion_body], model.bodies[p.gear_body]
+    if abs(abs(bp.axis @ bg.axis) - 1) > 1e-9:
+        raise ModelError("gear mesh: pinion and gear axes must be parallel")
+    beta = g["helix_angle"]
+    alpha_t = np.arctan(np.tan(g["pressure_angle"]) / np.cos(beta))
+    mt = g["module"] / np.cos(beta)
+    rb1 = mt * p.pinion_teeth / 2 * np.cos(alpha_t)
+    rb2 = mt * p.gear_teeth / 2 * np.cos(alpha_t)
+    xa, xb, e = bp.positions[g["pinion_node"]], bg.positions[g["gear_node"]], bp.axis
+    dist = float(np.linalg.norm((xb - xa) - e * np.dot(xb - xa, e)))
+    alpha = alpha_t
+    if dist > 1e-12:
+        if dist <= rb1 + rb2:
+            raise ModelError(
+                f"gear mesh: centre distance {dist:.6g} m must exceed the sum of base radii "
+                f"{rb1 + rb2:.6g} m (check `module` and the tooth counts)"
+            )
+        alpha = float(np.arccos((rb1 + rb2) / dist))  # working transverse pressure angle
+    sign = int(np.sign(plan.spin[p.pinion_body])) or 1
+    return line_of_action(xa, xb, e, rb1, rb2, alpha, beta, sign * g["side"], g["center_direction"])

@@ -1,0 +1,315 @@
+"""Floquet exponents on the harmonic lattice against independent references.
+
+* Single-generator systems (damped Mathieu, a gear pair with ``k (1 + eps cos W_m t)``, the
+  asymmetric Jeffcott rotor): the lattice of order ``N`` is the dense grid ``-N..N`` in
+  units of the generator, so its exponents must equal those of the dense Hill method; the
+  band edges against ``scipy.special`` Mathieu curves and the Jeffcott closed form.
+* Two uncoupled Mathieu oscillators pumped at two frequencies: the union of the two sets.
+* A three-gear torsional chain with two meshes pumped at ``5 w1`` and ``3 w1``: the largest
+  real part against the monodromy matrix (``solve_ivp``, DOP853), inside the combination
+  resonance ``2 w_n ~ W_m1 + W_m2`` where neither mesh alone is unstable.
+* Decided verdicts of coarse lattices against monodromy matrices (damped Mathieu grid).
+* The embedded gearbox at 3000 rpm: a decided verdict, checked against a refined lattice.
+"""
+
+from __future__ import annotations
+
+import sys
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.special import mathieu_a, mathieu_b
+
+import rheolin as rl
+from rheolin.budget import MemoryBudgetError
+from rheolin.floquet import TRUNCATION_SAFETY
+from rheolin.hill import hill_pencil
+from rheolin.lattice import harmonic_lattice, system_lattice
+from rheolin.stability.mechanism import MESH, classify
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "core"))
+from cases import Jeffcott, integrate
+
+
+# --------------------------------------------------------------------------- helpers
+def mathieu(a: float, q: float, z: float, w: float = 2.0) -> rl.PeriodicSystem:
+    """``y'' + 2 z y' + (a - 2 q cos w t) y = 0`` (``w = 2``: Mathieu's own time)."""
+    return rl.PeriodicSystem(
+        w, M={0: np.eye(1)}, D={0: 2 * z * np.eye(1)}, K={0: a * np.eye(1), 1: -q * np.eye(1)}
+    )
+
+
+def monodromy_max_real(system: rl.PeriodicSystem, rtol: float = 1e-13) -> float:
+    """Largest Floquet real part from the monodromy matrix over the full period 2 pi / w1:
+    ``M(t) q'' + D(t) q' + K(t) q = 0`` integrated from the unit vectors (DOP853)."""
+    n, T = system.n, 2 * np.pi / system.omega
+
+    def rhs(t: float, y: np.ndarray) -> np.ndarray:
+        M, D, K = (system.evaluate(name, t) for name in "MDK")
+        q, v = y[:n], y[n:]
+        return np.concatenate([v, np.linalg.solve(M, -D @ v - K @ q)])
+
+    cols = [
+        integrate(rhs, (0.0, T), e, rtol=rtol, atol=1e-16, method="DOP853").y[:, -1]
+        for e in np.eye(2 * n)
+    ]
+    mu = np.linalg.eigvals(np.column_stack(cols))
+    return float(np.log(np.abs(mu).max()) / T)
+
+
+def match_folded(reference: np.ndarray, other: np.ndarray, w: float) -> float:
+    """Largest distance from each reference exponent to the nearest ``other`` exponent,
+    imaginary parts compared modulo ``w`` (relative to ``max(|lambda|, w)``)."""
+    worst = 0.0
+    for lam in reference:
+        d = other - lam
+        d = d.real + 1j * (d.imag - w * np.round(d.imag / w))
+        worst = max(worst, float(np.abs(d).min()) / max(abs(lam), w))
+    return worst
+
+
+# --------------------------------------------------------------------------- one generator
+@pytest.mark.parametrize("a, q, z", [(1.0, 0.3, 0.05), (4.2, 1.0, 0.02), (0.25, 0.1, 0.0)])
+def test_mathieu_lattice_equals_dense(a: float, q: float, z: float) -> None:
+    s = mathieu(a, q, z)
+    dense = rl.floquet(s, 12, method="dense")
+    lat = rl.floquet(s, method="lattice", order=12)
+    assert lat.method == "lattice" and len(lat.lattice) == 25
+    assert lat.exponents.size == dense.exponents.size == 2
+    assert match_folded(dense.exponents, lat.exponents, s.omega) < 1e-8
+    assert lat.stable == dense.stable and lat.decided
+
+
+def test_mathieu_band_edges_from_the_lattice() -> None:
+    """Inside and outside the first two bands by 1 % of their width (scipy.special)."""
+    q = 1.0
+    for lo, hi in ((mathieu_b(1, q), mathieu_a(1, q)), (mathieu_b(2, q), mathieu_a(2, q))):
+        width = hi - lo
+        for a, unstable in (
+            (lo + 0.01 * width, True),
+            (hi - 0.01 * width, True),
+            (lo - 0.01 * width, False),
+            (hi + 0.01 * width, False),
+        ):
+            res = rl.floquet(mathieu(a, q, 0.0), method="lattice", order=12)
+            assert (not res.stable) == unstable, (a, lo, hi)
+
+
+def _gear_pair(eps: float, W_m: float) -> rl.PeriodicSystem:
+    """Torsional gear pair on its line of action: ``m_e x'' + k (1 + eps cos W_m t) x = 0``
+    plus a stiff translation of the gear (2 DOF; the mesh acts on ``x = u_1 - u_2``)."""
+    m1, m2, k, kb = 1.0, 3.0, 1e4, 1e6
+    w = np.array([1.0, -1.0])
+    K0 = k * np.outer(w, w) + np.diag([0.0, kb])
+    K1 = 0.5 * eps * k * np.outer(w, w)
+    return rl.PeriodicSystem(
+        W_m, M={0: np.diag([m1, m2])}, D={0: 1e-3 * K0 / 100}, K={0: K0, 1: K1}
+    )
+
+
+@pytest.mark.parametrize("eps, ratio", [(0.3, 2.0), (0.3, 2.3), (0.5, 1.0)])
+def test_gear_pair_lattice_equals_dense(eps: float, ratio: float) -> None:
+    s0 = _gear_pair(eps, 1.0)
+    w_n = np.sqrt(np.sort(np.linalg.eigvals(np.linalg.solve(s0.M[0], s0.K[0])).real))[0]
+    s = _gear_pair(eps, ratio * w_n)  # W_m = 2 w_n: the principal band
+    dense = rl.floquet(s, 10, method="dense")
+    lat = rl.floquet(s, method="lattice", order=10)
+    assert match_folded(dense.exponents, lat.exponents, s.omega) < 1e-8
+    assert lat.max_real == pytest.approx(dense.max_real, rel=1e-8, abs=1e-10)
+    assert lat.stable == dense.stable
+
+
+@pytest.mark.parametrize("W", [0.7, 0.95, 1.0, 1.3])
+def test_asymmetric_jeffcott_lattice_against_closed_form(W: float) -> None:
+    rotor = Jeffcott(W=W, c=0.02)
+    s = rotor.system()
+    dense = rl.floquet(s, rl.HarmonicSet(2 * np.arange(-8, 9)), method="dense")
+    lat = rl.floquet(s, method="lattice", order=8)
+    assert lat.lattice is not None and lat.lattice.generators == (2,)
+    assert match_folded(dense.exponents, lat.exponents, s.omega) < 1e-8
+    assert (not lat.stable) == rotor.unstable and lat.decided
+
+
+# --------------------------------------------------------------------------- two generators
+def test_two_uncoupled_mathieu_oscillators_give_the_union() -> None:
+    """Oscillator A pumped at 3 w1 (inside its first band), B at 5 w1 (stable): the lattice
+    exponents of the pair are those of A and of B, each from its own dense Hill problem."""
+    w1 = 1.0
+    (aA, qA, zA), (aB, qB, zB) = (1.0, 0.3, 0.02), (2.0, 0.4, 0.05)
+
+    # y'' + 2 z y' + (a - 2 q cos(W t)) y in units where W = 2: scale time by W / 2
+    def osc(a: float, q: float, z: float, W: float) -> tuple[float, float, float]:
+        s = (W / 2) ** 2
+        return a * s, q * s, z * W / 2
+
+    kA, qkA, cA = osc(aA, qA, zA, 3 * w1)
+    kB, qkB, cB = osc(aB, qB, zB, 5 * w1)
+    pair = rl.PeriodicSystem(
+        w1,
+        M={0: np.eye(2)},
+        D={0: np.diag([2 * cA, 2 * cB])},
+        K={0: np.diag([kA, kB]), 3: np.diag([-qkA, 0.0]), 5: np.diag([0.0, -qkB])},
+    )
+    lat = rl.floquet(pair, method="lattice", order=12)
+    singles = [
+        rl.floquet(
+            rl.PeriodicSystem(
+                W,
+                M={0: np.eye(1)},
+                D={0: 2 * c * np.eye(1)},
+                K={0: k * np.eye(1), 1: -qk * np.eye(1)},
+            ),
+            12,
+        )
+        for W, k, qk, c in ((3 * w1, kA, qkA, cA), (5 * w1, kB, qkB, cB))
+    ]
+    union = np.concatenate([r.exponents for r in singles])
+    assert lat.exponents.size == union.size == 4
+    assert np.sort(lat.exponents.real) == pytest.approx(np.sort(union.real), rel=1e-9, abs=1e-12)
+    assert match_folded(union, lat.exponents, w1) < 1e-9
+    assert not lat.stable and lat.decided
+    assert lat.max_real == pytest.approx(singles[0].max_real, rel=1e-9)
+
+
+J_CHAIN = (0.1, 1e-3, 0.1)
+R_CHAIN = (0.02, 0.03, 0.02, 0.03)
+
+
+def chain(w1: float, eps1: float, eps2: float, zeta: float = 0.002) -> rl.PeriodicSystem:
+    """Input and output gears of large inertia (soft torsional couplings to ground), an
+    intermediate gear between them; mesh stiffness ``k (1 + eps_i cos(g_i w1 t))`` with
+    tooth counts giving mesh harmonics ``g_1 = 5``, ``g_2 = 3`` (full period 2 pi / w1)."""
+    r1, r2, r3, r4 = R_CHAIN
+    k = 1e8
+    w_a, w_b = np.array([r1, r2, 0.0]), np.array([0.0, r3, r4])
+    K0 = k * np.outer(w_a, w_a) + k * np.outer(w_b, w_b) + np.diag([1e4, 0.0, 1e4])
+    K = {0: K0}
+    if eps1:
+        K[5] = 0.5 * k * eps1 * np.outer(w_a, w_a)
+    if eps2:
+        K[3] = 0.5 * k * eps2 * np.outer(w_b, w_b)
+    w_top = np.sqrt(np.max(np.linalg.eigvals(np.linalg.solve(np.diag(J_CHAIN), K0)).real))
+    return rl.PeriodicSystem(w1, M={0: np.diag(J_CHAIN)}, D={0: 2 * zeta / w_top * K0}, K=K)
+
+
+def _w_gear() -> float:
+    s = chain(1.0, 0.0, 0.0)
+    return float(np.sqrt(np.max(np.linalg.eigvals(np.linalg.solve(s.M[0], s.K[0])).real)))
+
+
+@pytest.mark.parametrize("ratio", [8.03, 7.8])
+def test_two_mesh_chain_against_the_monodromy_matrix(ratio: float) -> None:
+    """``2 w_n / w1 = ratio``: at 8.03 the combination resonance ``2 w_n ~ W_m1 + W_m2`` is
+    unstable although each mesh alone is stable; at 7.8 all is stable."""
+    w1 = 2 * _w_gear() / ratio
+    both = chain(w1, 0.3, 0.3)
+    lat = rl.floquet(both, method="lattice", order=8)
+    ref = monodromy_max_real(both)
+    assert lat.decided and lat.complete
+    if ratio == 8.03:
+        assert ref > 1.0 and not lat.stable
+        assert lat.max_real == pytest.approx(ref, rel=1e-6)
+        for alone in (chain(w1, 0.3, 0.0), chain(w1, 0.0, 0.3)):
+            one = rl.floquet(alone, method="lattice", order=8)
+            assert one.stable and one.decided
+            assert monodromy_max_real(alone) < 0
+        mech = classify(lat, [("mesh 1", 5, "mesh"), ("mesh 2", 3, "mesh")], w1)
+        assert mech.category == MESH and mech.resonance == "combination"
+        assert set(mech.sources) == {"mesh 1", "mesh 2"}
+        assert "2 x" in mech.relation  # the same mode at harmonic 0 and at the partner
+    else:
+        assert ref < 0 and lat.stable
+        assert lat.max_real == pytest.approx(ref, rel=1e-4)
+
+
+def test_decided_lattice_verdicts_match_the_monodromy_matrix() -> None:
+    """Damped Mathieu over a grid crossing the first bands, lattices of order 1..4: a
+    decided verdict equals the monodromy matrix's; the coarse ones near the bands say
+    undecided; order 10 decides everywhere."""
+    from test_floquet_robust import _monodromy_stable
+
+    undecided = 0
+    for a in np.linspace(-0.5, 6.0, 9):
+        for q in (0.5, 1.5, 3.0):
+            for z in (0.02, 0.2):
+                s = mathieu(a, q, z)
+                truth = _monodromy_stable(a, q, z)
+                for p in (1, 2, 3, 4):
+                    res = rl.floquet(s, method="lattice", order=p)
+                    if res.decided:
+                        assert res.stable == truth, (a, q, z, p, res.exponents)
+                    else:
+                        undecided += 1
+                assert rl.floquet(s, method="lattice", order=10).decided
+    assert 0 < undecided < 150
+
+
+# --------------------------------------------------------------------------- refusals
+def test_dense_refuses_a_lattice_shaped_harmonic_set() -> None:
+    """The case that fooled the dense path: the combination resonance of the chain is
+    unstable, but a lattice-shaped set handed to the dense method was judged stable and
+    decided. Now it is refused; the lattice method finds the instability."""
+    w1 = 2 * _w_gear() / 8.03
+    s = chain(w1, 0.3, 0.3)
+    lattice_set = harmonic_lattice([3, 5], 4).harmonics
+    for method in ("auto", "dense", "sparse"):
+        with pytest.raises(ValueError, match="lattice"):
+            rl.floquet(s, lattice_set, method=method)
+    assert not rl.floquet(s, method="lattice", order=6).stable
+
+
+def test_memory_budget_refuses_or_coarsens_before_allocating(monkeypatch) -> None:
+    w1 = 2 * _w_gear() / 8.03
+    s = chain(w1, 0.3, 0.3)
+    with pytest.raises(MemoryBudgetError, match="budget"):
+        rl.floquet(s, method="lattice", order=4, memory_budget="1 MB")
+    from rheolin.floquet import lattice_memory
+
+    small, large = (lattice_memory(s, system_lattice(s, p)) for p in (1, 2))
+    assert small < large
+    res = rl.floquet(s, method="lattice", memory_budget=(small + large) // 2)
+    assert res.lattice.order == 1 and "lowered" in res.info["note"]
+    monkeypatch.setenv("RHEOLIN_MEMORY_BUDGET", "1 kB")
+    loaded = rl.PeriodicSystem(
+        w1, M=s.M, D=s.D, K={k: v for k, v in s.K.items() if k >= 0}, f={5: np.ones(s.n)}
+    )
+    sol = rl.solve(loaded, rl.HarmonicSet.closure(loaded, order=2))
+    assert sol.success and sol.stable is None
+    assert "stability not checked" in sol.message and "budget" in sol.message
+    with pytest.raises(MemoryBudgetError):
+        rl.solve(loaded, rl.HarmonicSet.closure(loaded, order=2), stability=True)
+
+
+def test_hill_pencil_is_linear_in_the_harmonic_count() -> None:
+    """200,001 harmonics of a one-DOF system: a |H| x |H| comparison would need 40 GB."""
+    s = mathieu(1.0, 0.3, 0.05, w=1.0)
+    H = np.arange(-100_000, 100_001)
+    tracemalloc.start()
+    A, _ = hill_pencil(s, H)
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    assert A.shape == (400_002, 400_002) and A.nnz < 10 * A.shape[0]
+    assert peak < 500e6
+
+
+# --------------------------------------------------------------------------- the gearbox
+def test_gearbox_gets_a_decided_verdict_checked_on_a_refined_lattice() -> None:
+    from rheolin.data import example_path
+    from rheolin.io import load_model
+
+    system = load_model(example_path("gearbox")).assemble(3000 * np.pi / 30).system
+    res = rl.floquet(system)
+    assert res.method == "lattice" and res.complete and res.decided and res.stable
+    # every exponent is computed, or certified by the Gershgorin disc of its mode
+    skipped = res.info["certified_modes"]
+    assert res.exponents.size + 2 * skipped.size == 2 * system.n
+    assert np.all(skipped.real + res.info["certified_radii"] < 0)
+    assert res.info["memory_estimate"] < 4 * 2**30
+    order = res.lattice.order
+    lead = res.exponents[res.exponents.real > res.max_real - 1e-9]
+    fine = rl.floquet(system, method="lattice", order=order + 2, near=lead)
+    assert not fine.complete and not fine.decided  # a partial search never decides
+    assert fine.max_real == pytest.approx(res.max_real, abs=TRUNCATION_SAFETY * res.truncation[0])
+    assert abs(fine.max_real - res.max_real) < 1e-6 * abs(res.max_real)
