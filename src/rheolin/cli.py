@@ -21,6 +21,7 @@ import numpy as np
 import typer
 from rich.console import Console
 from rich.markup import escape
+from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
 from . import __version__
@@ -346,6 +347,7 @@ def _campbell_stability(model: Any, speeds: np.ndarray, flag: bool | None) -> tu
     from .budget import format_bytes, memory_budget
     from .floquet import floquet_memory
     from .stability import stability_map as map_fn
+    from .study.run import MAP_PRECISION
 
     kind, estimate = floquet_memory(model.assemble(float(speeds[-1])).system)
     if flag is None and estimate > memory_budget():

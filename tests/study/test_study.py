@@ -73,14 +73,22 @@ def test_parallel_equals_serial(serial, band_file, client):
 
 
 def test_serial_study_equals_the_sweep_and_the_closed_form(serial, band_file):
-    """Against ``sweep_speeds`` (one solve after another, no study machinery) and the band
-    edges sqrt(k_x / m) = 100, sqrt(k_y / m) = 110 rad/s."""
+    """Against ``sweep_speeds`` (one solve after another, no study machinery; it warm-starts
+    each speed from the previous one, so the two agree to the solver's tolerance, not to the
+    bit) and the band edges sqrt(k_x / m) = 100, sqrt(k_y / m) = 110 rad/s."""
     with threadpool_limits(1):  # as on the study's workers: the same floating-point sums
         ref = sweep_speeds(band_model(), SPEEDS, order=2)
     ds = serial.dataset
     assert ds["response"].dims == ("speed", "harmonic", "node")
     for name in ref.data_vars:
-        np.testing.assert_array_equal(ds[name].values, ref[name].values, err_msg=name)
+        if name in ("residual", "iterations", "seconds", "solve_seconds"):
+            continue  # how the solver got there, not the answer
+        x, y = ds[name].values, ref[name].values
+        if x.dtype.kind == "f":
+            scale = np.nanmax(np.abs(y), initial=0.0)
+            np.testing.assert_allclose(x, y, rtol=1e-9, atol=1e-9 * scale, err_msg=name)
+        else:
+            np.testing.assert_array_equal(x, y, err_msg=name)
     inside = (SPEEDS > 100.0) & (SPEEDS < 110.0)  # (k_x - m W^2)(k_y - m W^2) < 0
     assert inside.sum() == 4
     np.testing.assert_array_equal(ds["stable"].values, ~inside)
