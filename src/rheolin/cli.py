@@ -55,7 +55,7 @@ STABILITY = typer.Option(
 
 
 def _fail(message: str) -> typer.Exit:
-    err.print(f"[red]error:[/red] {message}", highlight=False, markup=True)
+    err.print(f"[red]error:[/red] {message}", highlight=False, markup=True, soft_wrap=True)
     return typer.Exit(2)
 
 
@@ -119,6 +119,12 @@ def _options(
     )
 
 
+VARY = typer.Option(
+    [],
+    "--vary",
+    help="Vary a model parameter: 'PATH=start:stop:count unit' or 'PATH=v1,v2 unit', e.g. "
+    "'bearings.input_A.stiffness=1e8:4e8:7 N/m' (repeat for a grid; docs/studies.md).",
+)
 DEMO_OUT = typer.Option(Path("demo_results"), help="Output directory.")
 
 
@@ -224,12 +230,28 @@ def sweep(
     stability_map: bool = typer.Option(
         True, help="Also compute the Floquet stability map (stability_map.nc/.png, ranges refined)."
     ),
-    plots: bool = typer.Option(True, help="Write the response-vs-speed plot."),
+    plots: bool = typer.Option(True, help="Write the plots."),
+    vary: list[str] = VARY,
+    workers: int = typer.Option(
+        None, help="Local worker processes (default: the cores; 1: no Dask, in this process)."
+    ),
+    scheduler: str = typer.Option(
+        None, help="Run on an existing Dask cluster: its scheduler address (tcp://host:8786)."
+    ),
+    chunk_size: int = typer.Option(None, help="Points per task (default: adaptive)."),
+    overwrite: bool = typer.Option(
+        False, help="Replace another study's checkpoint and results in the output directory."
+    ),
+    quantity: str = typer.Option(
+        "response",
+        help="Output of the parameter plots: response, bearing_force, dte, max_floquet_real.",
+    ),
 ) -> None:
-    """Solve over speeds; write DIR/sweep.nc, DIR/sweep.json and DIR/sweep.png."""
-    from .io.atomic import atomic_write
-    from .results.dataset import write_dataset
-    from .results.sweep import sweep_speeds
+    """Solve over speeds (and parameter values, --vary) in parallel on Dask, checkpointed:
+    a re-run of the same command computes only the missing points. Writes DIR/sweep.nc,
+    DIR/sweep.json, plots and (with the map) DIR/stability_map.nc."""
+    from ._cli_study import run_sweep
+    from .plots.study import QUANTITIES
 
     lm = _load(model)
     opts = _options(lm, method, harmonics, max_order, stability)
@@ -237,112 +259,22 @@ def sweep(
         w = parse_speeds(speeds)
     except ModelError as exc:
         raise _fail(str(exc)) from None
-    out_dir = Path(out) if out is not None else Path(f"{model.stem}_sweep")
-    columns = (
-        TextColumn("{task.description}"),
-        BarColumn(),
-        TextColumn("{task.completed}/{task.total}"),
-        TimeRemainingColumn(),
-    )
-    with Progress(*columns, console=err) as bar:
-        task = bar.add_task("sweep", total=len(w))
-
-        def step(i: int, p: Any) -> None:
-            s = p.solution
-            bar.update(
-                task,
-                advance=1,
-                description=f"{w[i] * 30 / np.pi:7.0f} rpm {'ok' if s.success else 'FAILED'}",
-            )
-
-        # the stability map decides every speed's stability: no second Floquet run per point
-        point_opts = {**opts, "stability": False} if stability_map else opts
-        with _Notes() as notes:
-            ds = sweep_speeds(lm.model, w.tolist(), progress=step, **point_opts)
-    ranges: list[tuple[float, float]] = []
-    range_notes: list[dict[str, Any]] = []
-    smap = None
-    if stability_map:
-        from .stability import stability_map as map_fn
-
-        with err.status("Floquet stability map"):
-            smap = map_fn(lm.model, w, refine=MAP_PRECISION)
-        if opts["stability"] is not False:
-            _merge_map(ds, smap)
-        ds["map_max_real"] = ("speed", np.asarray(smap.max_real, dtype=float), {"units": "1/s"})
-        rpm = 30 / np.pi
-        ranges = [(r.lower * rpm, r.upper * rpm) for r in smap.ranges]
-        range_notes = [
-            {
-                "lower_rpm": r.lower * rpm,
-                "upper_rpm": r.upper * rpm,
-                "open_below": r.lower_open,
-                "open_above": r.upper_open,
-                "max_real_per_s": r.max_real,
-                "mechanism": r.mechanism,
-            }
-            for r in smap.ranges
-        ]
-    ds.attrs["model_sha256"] = lm.sha256
-    ds.attrs["stability_map"] = "computed" if smap is not None else "not computed"
-    write_dataset(ds, out_dir / "sweep.nc")
-    if smap is not None:
-        write_dataset(smap.to_dataset(), out_dir / "stability_map.nc")
-    table = {
-        "model_file": str(model),
-        "model_sha256": lm.sha256,
-        "speeds_rpm": ds["speed_rpm"].values.tolist(),
-        "success": ds["success"].values.astype(bool).tolist(),
-        "iterations": ds["iterations"].values.tolist(),
-        "stable": [None if s < 0 else bool(s) for s in ds["stable"].values],
-        "unstable_ranges_rpm": ranges,
-        "unstable_ranges": range_notes,
-        "warnings": notes.messages,
+    if workers is not None and workers < 1:
+        raise _fail(f"--workers must be >= 1, got {workers}")
+    if chunk_size is not None and chunk_size < 1:
+        raise _fail(f"--chunk-size must be >= 1, got {chunk_size}")
+    if quantity not in QUANTITIES:
+        raise _fail(f"--quantity must be one of {sorted(QUANTITIES)}, got {quantity!r}")
+    settings = {
+        **opts,
+        "order": harmonics,  # None: the file's [harmonics] at every grid point
+        "max_order": max_order,
+        "stability_map": stability_map,
     }
-    with atomic_write(out_dir / "sweep.json") as tmp:
-        tmp.write_text(json.dumps(table, indent=2) + "\n")
-    if plots:
-        from .plots import sweep_plot
-
-        sweep_plot(ds, out_dir / "sweep.png", ranges)
-        if smap is not None:
-            from .plots.stability import plot_stability
-
-            plot_stability(smap, out_dir / "stability_map.png")
-    failed = int((ds["success"] == 0).sum())
-    unstable = int((ds["stable"] == 0).sum())
-    unchecked = int((ds["stable"] < 0).sum())
-    console.print(
-        f"{len(w)} speeds: {len(w) - failed} converged, {failed} not successful; stability: "
-        f"{unstable} unstable, {unchecked} not checked"
-        + (f"; stability map unstable ranges (rpm): {_fmt_ranges(ranges)}" if smap else "")
-    )
-    notes.show()
-    written = [out_dir / "sweep.nc", out_dir / "sweep.json"]
-    written += [out_dir / "sweep.png"] if plots else []
-    written += [out_dir / "stability_map.nc"] if smap is not None else []
-    written += [out_dir / "stability_map.png"] if smap is not None and plots else []
-    console.print("wrote " + ", ".join(str(p) for p in written))
-    if failed:
-        raise typer.Exit(1)
-
-
-#: Relative precision of the unstable-range bounds in ``sweep`` (0.04 rpm at 4000 rpm).
-MAP_PRECISION = 1e-5
-
-
-def _merge_map(ds: Any, smap: Any) -> None:
-    """Per-speed stability from the map; an unstable point is not a physical steady state."""
-    stable = np.asarray(smap.stable, dtype=bool)
-    ds["stable"].values[:] = stable.astype(int)
-    ds["max_floquet_real"].values[:] = np.asarray(smap.max_real, dtype=float)
-    demote = (~stable) & (ds["success"].values == 1)
-    ds["success"].values[demote] = 0
-    ds["status"].values[demote] = 4
-
-
-def _fmt_ranges(ranges: list[tuple[float, float]]) -> str:
-    return ", ".join(f"{lo:.1f}..{hi:.1f}" for lo, hi in ranges) or "none"
+    out_dir = Path(out) if out is not None else Path(f"{model.stem}_sweep")
+    run = dict(out=out_dir, overwrite=overwrite, workers=workers, chunk_size=chunk_size)
+    code = run_sweep(console, err, model, w, vary, settings, scheduler, run, plots, quantity)
+    raise typer.Exit(code)
 
 
 @app.command()
@@ -415,6 +347,7 @@ def _campbell_stability(model: Any, speeds: np.ndarray, flag: bool | None) -> tu
     from .budget import format_bytes, memory_budget
     from .floquet import floquet_memory
     from .stability import stability_map as map_fn
+    from .study.run import MAP_PRECISION
 
     kind, estimate = floquet_memory(model.assemble(float(speeds[-1])).system)
     if flag is None and estimate > memory_budget():

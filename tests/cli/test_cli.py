@@ -13,12 +13,14 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from rheolin.cli import MAP_PRECISION
 from rheolin.data import example_text
 from rheolin.io import atomic_write, parse_model
 from rheolin.results import complex_values, solve_point
+from rheolin.study import MAP_PRECISION
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "io"))
+sys.path.insert(0, str(Path(__file__).parents[1] / "study"))
+from study_cases import BAND
 from test_loader import SMALL, _broken
 
 ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "COLUMNS": "120"}
@@ -287,35 +289,7 @@ def test_campbell_writes_the_gyroscopic_split_and_critical_speeds(tmp_path):
     assert (tmp_path / "c" / "campbell.png").stat().st_size > 10000
 
 
-RIGID_BAND = """
-[model]
-name = "rigid rotor on a spring fixed in its own axes"
-input_body = "r"
-
-[[rigid_bodies]]
-name = "r"
-position = "0 0 0 m"
-mass = "1 kg"
-inertia = ["1 kg*m^2", "1 kg*m^2", "1 kg*m^2"]
-
-[[rigid_bodies.disks]]
-node = 0
-unbalance = "1e-6 kg*m"
-
-[[rigid_bodies.bearings]]
-name = "spring"
-node = 0
-components = ["ux", "uy"]
-stiffness = ["1e4 N/m", "1.21e4 N/m"]
-frame = "r"
-
-[[rigid_bodies.bearings]]
-name = "ground"
-node = 0
-components = ["uz", "phix", "phiy", "phiz"]
-stiffness = ["1e4 N/m", "1e4 N*m/rad", "1e4 N*m/rad", "1e4 N*m/rad"]
-damping = ["1 N*s/m", "1 N*m*s/rad", "1 N*m*s/rad", "1 N*m*s/rad"]
-"""
+RIGID_BAND = BAND  # tests/study/study_cases.py
 
 
 def test_sweep_stability_map_finds_the_asymmetric_band(tmp_path):

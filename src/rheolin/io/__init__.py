@@ -4,6 +4,13 @@
 """
 
 from .atomic import atomic_write
-from .loader import LoadedModel, load_model, parse_model, read_model
+from .loader import LoadedModel, load_model, parse_document, parse_model, read_model
 
-__all__ = ["LoadedModel", "atomic_write", "load_model", "parse_model", "read_model"]
+__all__ = [
+    "LoadedModel",
+    "atomic_write",
+    "load_model",
+    "parse_document",
+    "parse_model",
+    "read_model",
+]

@@ -8,23 +8,22 @@ from __future__ import annotations
 
 import hashlib
 import tomllib
-import typing
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from pydantic import BaseModel, ValidationError
+from pydantic import ValidationError
 
 from ..errors import ModelError
 from ..mechanics.joints import COMPONENTS
 from ..mechanics.model import Model
 from ..mechanics.sections import general_section
-from .schema import Bearing, CondensedBody, ModelFile, Shaft
+from .schema import Bearing, CondensedBody, ModelFile, Shaft, field_path, table_class
 from .units import UnitError, to_si
 
-__all__ = ["LoadedModel", "load_model", "parse_model", "read_model"]
+__all__ = ["LoadedModel", "load_model", "parse_document", "parse_model", "read_model"]
 
 #: Relative tolerance between the centre distance of the gear nodes and ``m (z1 + z2) / 2``.
 CENTRE_DISTANCE_RTOL = 0.03
@@ -71,20 +70,37 @@ def parse_model(
         doc = tomllib.loads(data.decode("utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ModelError(f"{source}: not valid TOML: {exc}") from None
+    return parse_document(doc, source, base, sha256=hashlib.sha256(data).hexdigest())
+
+
+def parse_document(
+    doc: dict[str, Any],
+    source: str = "<document>",
+    base: str | Path | None = None,
+    *,
+    sha256: str = "",
+) -> LoadedModel:
+    """Validate a model file already read into a dict (``tomllib``), e.g. one whose values a
+    parameter study changed; the same checks and messages as :func:`parse_model`.
+
+    >>> import tomllib
+    >>> from rheolin.data import example_text
+    >>> doc = tomllib.loads(example_text("rotor"))
+    >>> doc["shafts"][0]["bearings"][0]["stiffness"][0] = "6e7 N/m"
+    >>> float(parse_document(doc).model.joints["drive_end"]["K"][0, 0])
+    60000000.0
+    """
     try:
         spec = ModelFile.model_validate(doc)
     except ValidationError as exc:
         raise ModelError(_format(exc, source)) from None
     model = _Builder(spec, Path(base) if base is not None else Path.cwd()).build()
-    return LoadedModel(model, spec, hashlib.sha256(data).hexdigest(), source)
+    return LoadedModel(model, spec, sha256, source)
 
 
 # ---------------------------------------------------------------------- error messages
 def _path(loc: tuple[Any, ...]) -> str:
-    out = ""
-    for part in loc:
-        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
-    return out or "<file>"
+    return field_path(loc) or "<file>"
 
 
 def _fields_at(loc: tuple[Any, ...]) -> list[str]:
@@ -97,18 +113,8 @@ def _fields_at(loc: tuple[Any, ...]) -> list[str]:
         field = fields.get(part)
         if field is None:
             return []
-        cls = _model_in(field.annotation)
+        cls = table_class(field.annotation)
     return list(getattr(cls, "model_fields", {}))
-
-
-def _model_in(annotation: Any) -> Any:
-    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-        return annotation
-    for arg in typing.get_args(annotation):
-        found = _model_in(arg)
-        if found is not None:
-            return found
-    return None
 
 
 def _format(exc: ValidationError, source: str) -> str:

@@ -8,7 +8,8 @@ checked here; references between items (bodies, nodes, gear geometry) in
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+import typing
+from collections.abc import Callable, Sequence
 from typing import Annotated, Any, Literal
 
 import numpy as np
@@ -16,7 +17,17 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_valida
 
 from .units import UnitError, to_si
 
-__all__ = ["Bearing", "Disk", "Force", "Mesh", "ModelFile", "RigidBody", "Shaft"]
+__all__ = [
+    "Bearing",
+    "Disk",
+    "Force",
+    "Mesh",
+    "ModelFile",
+    "RigidBody",
+    "Shaft",
+    "field_path",
+    "table_class",
+]
 
 _LIST_TEXT = re.compile(r"^\s*\[?\s*([-+0-9.eE,\s]+?)\s*\]?\s+([A-Za-z][^\[\]]*)$")
 
@@ -293,3 +304,27 @@ class ModelFile(_Strict):
     condensed_bodies: list[CondensedBody] = []
     meshes: list[Mesh] = []
     forces: list[Force] = []
+
+
+def table_class(annotation: Any) -> Any:
+    """The table (pydantic model) inside a field's type, e.g. ``Shaft`` in ``list[Shaft]``;
+    None for a plain value."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in typing.get_args(annotation):
+        found = table_class(arg)
+        if found is not None:
+            return found
+    return None
+
+
+def field_path(location: Sequence[Any]) -> str:
+    """``("shafts", 0, "bearings", 1, "stiffness")`` -> ``"shafts[0].bearings[1].stiffness"``.
+
+    >>> field_path(("shafts", 0, "bearings", 1, "stiffness"))
+    'shafts[0].bearings[1].stiffness'
+    """
+    out = ""
+    for part in location:
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+    return out

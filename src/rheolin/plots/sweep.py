@@ -68,16 +68,17 @@ def sweep_plot(
     ax.set_title(f"response vs speed ({note})", fontsize=10)
     ax.legend(fontsize=8)
     node = str(resp.sum("harmonic").max("speed").idxmax("node").values)
-    amp = resp.sel(node=node).values * 1e6  # (speed, harmonic)
+    amp = resp.sel(node=node).values * 1e6  # (speed, harmonic); NaN where a point failed
     freq = ds["frequency"].values
-    ok = amp > amp.max() * 1e-6
+    top = float(np.nanmax(amp))
+    ok = amp > top * 1e-6
     sc = wf.scatter(
         freq[ok],
         np.broadcast_to(rpm[:, None], amp.shape)[ok],
         c=amp[ok],
-        s=8 + 40 * (amp[ok] / amp.max()) ** 0.5,
+        s=8 + 40 * (amp[ok] / top) ** 0.5,
         cmap="viridis",
-        norm=LogNorm(amp[ok].min(), amp.max()),
+        norm=LogNorm(amp[ok].min(), top),
     )
     fig.colorbar(sc, ax=wf, label=f"radial amplitude at {node} [µm]")
     orders = json.loads(ds.attrs.get("marker_orders_json", "{}"))

@@ -19,10 +19,13 @@ from ..mechanics.model import Model
 from .compute import OperatingPoint, solve_point
 from .dataset import complex_values, frequency_markers, point_dataset
 
-__all__ = ["sweep_dataset", "sweep_speeds"]
+__all__ = ["amplitudes", "speed_coordinates", "sweep_attrs", "sweep_dataset", "sweep_speeds"]
 
 
-def _amplitudes(ds: xr.Dataset) -> dict[str, Any]:
+def amplitudes(ds: xr.Dataset) -> dict[str, Any]:
+    """Single-sided amplitudes of a point's Dataset (:func:`~rheolin.results.point_dataset`):
+    radial ``response(harmonic, node)``, ``bearing_force(bearing, harmonic)``,
+    ``dte(mesh, harmonic)``."""
     two = xr.where(ds["harmonic"] > 0, 2.0, 1.0)
     q = complex_values(ds["displacement"])
     out = {"response": np.hypot(np.abs(q.sel(component="ux")), np.abs(q.sel(component="uy")))}
@@ -73,7 +76,7 @@ def _reduce(p: OperatingPoint) -> dict[str, Any]:
     s = p.solution
     return dict(
         speed=p.assembled.speed,
-        amps=_amplitudes(ds),
+        amps=amplitudes(ds),
         coords=ds.coords,
         success=int(s.success),
         status=int(s.status),
@@ -103,8 +106,23 @@ def sweep_dataset(points: list[dict[str, Any]], options: dict[str, Any]) -> xr.D
     data["stable"] = data["stable"] + ({"flag_values": "1 stable, 0 unstable, -1 not checked"},)
     data["method"] = ("speed", np.array([p["method"] for p in points]))
     harmonic = first["coords"]["harmonic"].values
-    w1_per_speed = first["base_ratio"]
-    coords: dict[str, Any] = {
+    coords = speed_coordinates(speeds, harmonic, first["base_ratio"])
+    for name in ("node", "body", "bearing", "mesh"):
+        if name in first["coords"]:
+            c = first["coords"][name]
+            coords[name] = (c.dims[0], c.values)
+    ds = xr.Dataset(data, coords=coords)
+    orders = {k: v / (first["speed"] / (2 * math.pi)) for k, v in first["markers"].items()}
+    ds.attrs.update(sweep_attrs(options, orders))
+    return ds
+
+
+def speed_coordinates(
+    speeds: np.ndarray, harmonic: np.ndarray, w1_per_speed: float
+) -> dict[str, Any]:
+    """``speed`` [rad/s], ``speed_rpm``, ``harmonic``, its ``order`` and the
+    ``frequency(speed, harmonic)`` [Hz] of a result over speed."""
+    return {
         "speed": ("speed", speeds, {"units": "rad/s"}),
         "speed_rpm": ("speed", speeds * 30 / math.pi, {"units": "rpm"}),
         "harmonic": ("harmonic", harmonic),
@@ -115,18 +133,15 @@ def sweep_dataset(points: list[dict[str, Any]], options: dict[str, Any]) -> xr.D
             {"units": "Hz"},
         ),
     }
-    for name in ("node", "body", "bearing", "mesh"):
-        if name in first["coords"]:
-            c = first["coords"][name]
-            coords[name] = (c.dims[0], c.values)
-    ds = xr.Dataset(data, coords=coords)
-    orders = {k: v / (first["speed"] / (2 * math.pi)) for k, v in first["markers"].items()}
-    ds.attrs.update(
+
+
+def sweep_attrs(options: dict[str, Any], marker_orders: dict[str, float]) -> dict[str, Any]:
+    """Attributes of a result over speed: settings, plot markers (shaft and mesh orders)."""
+    return dict(
         rheolin_version=__version__,
         method=str(options.get("method", "auto")),
         closure_order=int(options.get("order", 2)),
         max_order=float(options.get("max_order") or 0.0),
-        marker_orders_json=json.dumps(orders),
+        marker_orders_json=json.dumps(marker_orders),
         convention="single-sided amplitudes 2|x_n| (|x_0| for the mean); radial = hypot(x, y)",
     )
-    return ds

@@ -1,0 +1,192 @@
+"""Terminal side of ``rheolin sweep``: the progress bar over the whole study and the summary."""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import signal
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from rich.console import Console
+from rich.markup import escape
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+
+__all__ = ["StudyBar", "print_study_summary", "run_sweep"]
+
+RPM = 30 / np.pi
+
+
+def run_sweep(
+    console: Console,
+    err: Console,
+    model: Path,
+    speeds: np.ndarray,
+    vary: Sequence[str],
+    settings: dict[str, Any],
+    scheduler: str | None,
+    run: dict[str, Any],
+    plots: bool,
+    quantity: str,
+) -> int:
+    """Run the study of ``rheolin sweep``; returns the exit code (0, 1, 2, 130). ``run`` holds
+    the keywords of :func:`rheolin.study.run_study` (``out``, ``workers``, ...)."""
+    from .errors import ModelError
+    from .study import ParameterError, Settings, StudyInterrupted, StudySpec, run_study
+    from .study.files import write_results
+
+    def fail(message: str) -> int:
+        err.print(f"[red]error:[/red] {escape(message)}", highlight=False, soft_wrap=True)
+        return 2
+
+    try:
+        spec = StudySpec.create(model, speeds, list(vary), Settings(**settings))
+    except ParameterError as exc:
+        return fail(f"--vary {exc}")
+    except ModelError as exc:
+        return fail(str(exc))
+    write = functools.partial(write_results, plots=plots, quantity=quantity)
+    try:
+        with _client(scheduler) as client, _sigterm_as_interrupt(), StudyBar(err, spec) as bar:
+            result = run_study(spec, client=client, progress=bar, write=write, **run)
+    except StudyInterrupted as exc:
+        err.print(
+            f"interrupted: {exc.done} of {exc.total} points are done and kept in "
+            f"{Path(run['out']) / 'checkpoint'}; run the same command again to resume",
+            highlight=False,
+            soft_wrap=True,
+        )
+        return 130
+    except ModelError as exc:  # another study in the directory, a busy directory, --scheduler
+        return fail(str(exc))
+    print_study_summary(console, err, result)
+    return 0 if bool((result.dataset["success"] == 1).all()) else 1
+
+
+@contextlib.contextmanager
+def _client(address: str | None) -> Iterator[Any]:
+    """A client of an existing cluster (not closed with the study's end), or None."""
+    if address is None:
+        yield None
+        return
+    from distributed import Client
+
+    from .errors import ModelError
+
+    try:
+        client = Client(address, timeout="10s")
+    except (OSError, ValueError) as exc:
+        raise ModelError(f"--scheduler {address}: cannot connect: {exc}") from None
+    try:
+        yield client
+    finally:
+        client.close()
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM (a batch system's stop) ends the study like Ctrl-C: finished chunks kept."""
+
+    def interrupt(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+class StudyBar:
+    """One rich progress bar with an ETA over every point (and then every stability map
+    being refined); failed points are printed above it as they are reported."""
+
+    def __init__(self, console: Console, spec: Any) -> None:
+        self.console = console
+        self.spec = spec
+        self.progress = Progress(
+            TextColumn("{task.description}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TextColumn("elapsed"),
+            TimeElapsedColumn(),
+            TextColumn("ETA"),
+            TimeRemainingColumn(),
+            console=console,
+        )
+        self.task: Any = None
+        self.announced = False
+
+    def __enter__(self) -> StudyBar:
+        self.progress.__enter__()
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.progress.__exit__(*exc)
+
+    def __call__(self, event: Any) -> None:
+        if self.task is None:
+            if event.resumed:
+                self.console.print(
+                    f"resumed: {event.resumed} of {event.total} points already done",
+                    highlight=False,
+                )
+            self.task = self.progress.add_task("points", total=event.total, completed=event.done)
+        for point, message in event.failures:
+            self.console.print(
+                f"[red]failed:[/red] {escape(self.where(point))}: {escape(message)}",
+                highlight=False,
+            )
+        what = "stability maps" if event.phase == "maps" else "points"
+        failed = f" ({event.failed} failed)" if event.failed else ""
+        self.progress.update(
+            self.task, completed=event.done, total=event.total, description=what + failed
+        )
+
+    def where(self, point: int) -> str:
+        spec = self.spec
+        rpm = float(spec.speeds[spec.speed_of(point)]) * RPM
+        extra = spec.describe(spec.combo_of(point))
+        return f"{rpm:.6g} rpm" + (f", {extra}" if extra else "")
+
+
+def print_study_summary(console: Console, err: Console, result: Any) -> None:
+    """Counts, unstable ranges and the files written (warnings to ``err``)."""
+    ds, spec = result.dataset, result.spec
+    n = spec.n_points
+    failed = int((ds["status"] < 0).sum())
+    unsuccessful = int((ds["success"] == 0).sum())
+    unstable = int((ds["stable"] == 0).sum())
+    unchecked = int((ds["stable"] < 0).sum())
+    grid = " x ".join(str(len(p.values)) for p in spec.parameters)
+    size = f"{spec.speeds.size} speeds" + (f" x {grid} parameter values" if grid else "")
+    ranges = []
+    for combo, smap in sorted(result.maps.items()):
+        at = spec.describe(combo)
+        for r in smap.ranges:
+            where = f" at {at}" if at else ""
+            ranges.append(
+                f"{r.lower * RPM:.1f}..{r.upper * RPM:.1f}{where} ({r.label or r.mechanism})"
+            )
+    console.print(
+        f"{size} = {n} points ({result.resumed} from the checkpoint, {result.computed} "
+        f"computed now): {n - unsuccessful} converged, {unsuccessful} not successful"
+        f"{f' ({failed} failed with an error)' if failed else ''}; stability: {unstable} "
+        f"unstable, {unchecked} not checked",
+        highlight=False,
+    )
+    if result.maps:
+        console.print("stability map unstable ranges (rpm): " + ("; ".join(ranges) or "none"))
+    for w in result.warnings:
+        err.print(f"[yellow]warning:[/yellow] {escape(w)}", highlight=False)
+    if result.written:
+        console.print("wrote " + ", ".join(str(p) for p in result.written), highlight=False)

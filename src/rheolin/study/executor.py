@@ -1,0 +1,199 @@
+"""Where tasks run: in this process (serial), or on a Dask cluster (``dask.distributed``).
+
+Both executors offer the same three calls (``submit``, ``next_done``, ``cancel``), so a study
+has one code path. :func:`local_cluster` starts the default cluster: processes with one
+thread each (the solvers hold the GIL in SuperLU), one BLAS thread per worker.
+
+:class:`Planner` cuts the points still to do into chunks: the first tasks have one point each,
+then chunks aim at :data:`TARGET_SECONDS` from the measured time per point, so progress and
+checkpoints stay frequent for slow models and the per-task overhead small for fast ones. The
+chunking never changes a result: every point is solved on its own.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import signal
+import threading
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
+
+__all__ = [
+    "BLAS_ENV",
+    "TARGET_SECONDS",
+    "DaskExecutor",
+    "Planner",
+    "SerialExecutor",
+    "cores",
+    "local_cluster",
+]
+
+#: Environment of every worker process: one BLAS/OpenMP thread.
+BLAS_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+#: Aimed duration of one chunk [s].
+TARGET_SECONDS = 5.0
+#: Most points in one chunk.
+MAX_CHUNK = 256
+
+
+class Planner:
+    """Chunks of the pending points; a chunk never mixes parameter combinations.
+
+    >>> p = Planner([0, 1, 2, 3, 7, 8], combo_of=lambda i: i // 5, slots=1)
+    >>> p.next(), p.observe(1, 0.5), p.next(), p.next()
+    ([0], None, [1, 2, 3], [7, 8])
+    """
+
+    def __init__(
+        self,
+        points: Sequence[int],
+        combo_of: Callable[[int], int],
+        *,
+        slots: int = 1,
+        chunk_size: int | None = None,
+    ) -> None:
+        self.pending = deque(sorted(points))
+        self.combo_of = combo_of
+        self.fixed = chunk_size
+        self.seconds_per_point: float | None = None
+        self.slots = max(1, slots)
+
+    def __bool__(self) -> bool:
+        return bool(self.pending)
+
+    def observe(self, points: int, seconds: float) -> None:
+        """Measured time of a finished chunk (running mean per point)."""
+        if points > 0:
+            rate = seconds / points
+            old = self.seconds_per_point
+            self.seconds_per_point = rate if old is None else 0.7 * old + 0.3 * rate
+
+    def next(self) -> list[int]:
+        """The next chunk (empty when nothing is pending)."""
+        size = self.fixed or self._size()
+        if not self.pending:
+            return []
+        combo = self.combo_of(self.pending[0])
+        out = [self.pending.popleft()]
+        while self.pending and len(out) < size and self.combo_of(self.pending[0]) == combo:
+            out.append(self.pending.popleft())
+        return out
+
+    def _size(self) -> int:
+        if self.seconds_per_point is None:
+            return 1
+        size = int(TARGET_SECONDS / max(self.seconds_per_point, 1e-6))
+        share = -(-len(self.pending) // self.slots)  # keep every slot busy to the end
+        return max(1, min(size, share, MAX_CHUNK))
+
+
+class SerialExecutor:
+    """Runs each task in this process when its result is asked for."""
+
+    slots = 1
+
+    def __init__(self) -> None:
+        self._queue: deque[tuple[int, Callable[[Any], Any], Any]] = deque()
+        self._count = 0
+
+    def submit(self, fn: Callable[[Any], Any], task: Any) -> int:
+        self._count += 1
+        self._queue.append((self._count, fn, task))
+        return self._count
+
+    def next_done(self) -> tuple[int, Any, BaseException | None]:
+        handle, fn, task = self._queue.popleft()
+        try:
+            return handle, fn(task), None
+        except Exception as exc:
+            return handle, None, exc
+
+    def cancel(self) -> None:
+        self._queue.clear()
+
+
+class DaskExecutor:
+    """Tasks as futures on a ``distributed.Client``; results in completion order."""
+
+    def __init__(self, client: Any) -> None:
+        from distributed import as_completed
+
+        self.client = client
+        self.slots = max(1, 2 * sum(client.nthreads().values()))
+        self._done = as_completed()
+        self._futures: dict[Any, Any] = {}
+
+    def submit(self, fn: Callable[[Any], Any], task: Any) -> Any:
+        future = self.client.submit(fn, task, pure=False)
+        self._futures[future.key] = future
+        self._done.add(future)
+        return future.key
+
+    def next_done(self) -> tuple[Any, Any, BaseException | None]:
+        future = next(self._done)
+        self._futures.pop(future.key, None)
+        try:
+            return future.key, future.result(), None
+        except Exception as exc:  # the task raised, or its worker died (KilledWorker)
+            return future.key, None, exc
+
+    def cancel(self) -> None:
+        if self._futures:
+            with contextlib.suppress(Exception):
+                self.client.cancel(list(self._futures.values()))
+        self._futures.clear()
+
+
+@contextlib.contextmanager
+def local_cluster(workers: int | None = None) -> Iterator[Any]:
+    """A ``distributed.Client`` on a new ``LocalCluster`` of ``workers`` processes (default:
+    the cores available), one thread and one BLAS thread each; closed on exit."""
+    import dask
+    from distributed import Client, LocalCluster
+
+    n = workers or cores()
+    spawn_env = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
+    with (
+        dask.config.set({"distributed.nanny.pre-spawn-environ": {**spawn_env, **BLAS_ENV}}),
+        _sigint_ignored(),
+    ):
+        cluster = LocalCluster(
+            n_workers=n,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
+    client = Client(cluster)
+    try:
+        yield client
+    finally:
+        with contextlib.suppress(Exception):
+            client.close()
+        with contextlib.suppress(Exception):
+            cluster.close()
+
+
+@contextlib.contextmanager
+def _sigint_ignored() -> Iterator[None]:
+    """Worker processes started inside inherit an ignored SIGINT: Ctrl-C in a terminal
+    (sent to the whole process group) reaches only this process, which stops the study."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def cores() -> int:
+    """Cores available to this process."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - non-Linux
+        return os.cpu_count() or 1
