@@ -183,15 +183,24 @@ class PardisoAnalysis:
             self._call(22, slot + 1, a, dummy, dummy, 1)
             return int(self.iparm[13])
 
-    def solve(self, slot: int, a: np.ndarray, B: np.ndarray) -> np.ndarray:
-        """Solve with the factor in ``slot`` for the columns of ``B`` (``n`` or ``n x k``)."""
+    def solve(self, slot: int, a: np.ndarray, B: np.ndarray, trans: str = "N") -> np.ndarray:
+        """Solve with the factor in ``slot`` for the columns of ``B`` (``n`` or ``n x k``);
+        ``trans``: ``"N"`` (``A X = B``), ``"T"`` (``A^T X = B``) or ``"H"`` (``A^H X = B``)."""
         one = B.ndim == 1
         Bf = np.asfortranarray(B.reshape(self.n, -1), dtype=self.dtype)
         X = np.zeros_like(Bf)
         if Bf.shape[1] == 0:
             return X
+        # iparm(12): 0 plain, 1 conjugate transposed, 2 transposed (CSR rows are our columns)
+        mode = {"N": 0, "H": 1, "T": 2}[trans]
+        if self.dtype == np.float64 and mode == 1:
+            mode = 2
         with self._lock:
-            self._call(33, slot + 1, a, Bf, X, Bf.shape[1])
+            self.iparm[11] = mode
+            try:
+                self._call(33, slot + 1, a, Bf, X, Bf.shape[1])
+            finally:
+                self.iparm[11] = 0
         return X[:, 0] if one else X
 
     def release(self, slot: int | None = None) -> None:
@@ -220,19 +229,23 @@ class PardisoFactor:
         self._owner, self._slot, self._a = owner, slot, a
         self.nbytes = owner.factor_bytes + a.nbytes
 
-    def solve(self, B: np.ndarray) -> np.ndarray:
-        """``A^-1 B`` (``B``: ``n`` or ``n x k``)."""
+    def solve(self, B: np.ndarray, trans: str = "N") -> np.ndarray:
+        """``A^-1 B`` (``B``: ``n`` or ``n x k``); ``trans="T"``/``"H"`` solves with the
+        transpose / conjugate transpose."""
         if self._slot < 0:
             raise RuntimeError("this PARDISO factor was released")
         B = np.asarray(B)
         if not np.iscomplexobj(self._a) and np.iscomplexobj(B):
             both = self._owner.analysis.solve(
-                self._slot, self._a, np.column_stack([B.real, B.imag]).reshape(B.shape[0], -1)
+                self._slot,
+                self._a,
+                np.column_stack([B.real, B.imag]).reshape(B.shape[0], -1),
+                trans,
             )
             k = both.shape[1] // 2
             X = both[:, :k] + 1j * both[:, k:]
             return X[:, 0] if B.ndim == 1 else X
-        return self._owner.analysis.solve(self._slot, self._a, B)
+        return self._owner.analysis.solve(self._slot, self._a, B, trans)
 
     def release(self) -> None:
         """Free the factor's slot."""
