@@ -72,8 +72,10 @@ def lattice_memory(system: PeriodicSystem, lattice: Lattice, k: int = 8) -> int:
             continue
         block = _Block(system.M.get(k_h), system.D.get(k_h), system.K.get(k_h), n, system.is_sparse)
         nnz += pairs * int(block.entries()[0].size)
+    from .search import ARNOLDI_STEPS
+
     size2 = 2 * n * H.size
-    ncv = max(2 * k + 1, 20)
+    ncv = max(2 * k + 1, ARNOLDI_STEPS[-1] + 1)  # the Arnoldi basis (no restarts)
     return int(
         nnz * 16 * (6 + LU_FILL) + size2 * 16 * (ncv + 8) + (2 * n) ** 2 * 16 * 6 + 64 * 2**20
     )

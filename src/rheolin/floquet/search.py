@@ -4,7 +4,6 @@
 
 from __future__ import annotations
 
-import threading
 import time
 from typing import Any
 
@@ -384,11 +383,14 @@ class _Shifted:
 PARDISO_ABOVE = 8000
 PARDISO_ABOVE_ARNOLDI = 30000
 
-_LOCAL = threading.local()
 
+def _pardiso_factor(hill: LatticeHill, Q: Any) -> Any | None:
+    """A PARDISO factor of ``Q`` (None: not installed, or no free slot).
 
-def _pardiso_factor(Q: Any) -> Any | None:
-    """A PARDISO factor of ``Q`` (None: not installed, or no free slot)."""
+    The analysis is kept on ``hill`` (one lattice at one speed), not across calls: MKL
+    PARDISO crashes when its thread count changes between the analysis and a factorization
+    (``threadpool_limits`` entered anew by the next call).
+    """
     from ..linalg.direct import available_backends, csc_pattern_key
 
     if "pardiso" not in available_backends():
@@ -398,17 +400,14 @@ def _pardiso_factor(Q: Any) -> Any | None:
     Q = sp.csc_array(Q)
     Q.sort_indices()
     key = csc_pattern_key(Q.indptr, Q.indices)
-    cache = getattr(_LOCAL, "analyses", None)
-    if cache is None:
-        cache = _LOCAL.analyses = {}
-    backend = cache.get(key)
-    if backend is None:
-        cache.clear()  # one pattern at a time per thread (a lattice of one sweep)
-        backend = cache[key] = PardisoBackend(
+    cached = getattr(hill, "_pardiso", None)
+    if cached is None or cached[0] != key:
+        backend = PardisoBackend(
             Q.indptr.astype(np.int64), Q.indices.astype(np.int64), True, slots=4
         )
+        hill._pardiso = cached = (key, backend)  # type: ignore[attr-defined]
     try:
-        return backend.factor(Q.data)
+        return cached[1].factor(Q.data)
     except RuntimeError as exc:
         if "slots" in str(exc):
             return None
@@ -425,7 +424,7 @@ def _factor(hill: LatticeHill, sigma: complex, w: float, *, many: bool = False) 
         Q = hill.Q(sigma)
         try:
             if Q.shape[0] > (PARDISO_ABOVE_ARNOLDI if many else PARDISO_ABOVE):
-                f = _pardiso_factor(Q)
+                f = _pardiso_factor(hill, Q)
                 if f is not None:
                     return _Shifted(f, sigma)
             return _Shifted(spla.splu(Q, **SPLU), sigma)
