@@ -21,10 +21,13 @@ A rigid rotor on an anisotropic bearing with a static unbalance, turning at 100 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import functools
+import inspect
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any
+from pathlib import Path
+from typing import Any, ParamSpec, TypeVar
 
 import numpy as np
 
@@ -43,6 +46,25 @@ from .speeds import GearPair, SpeedPlan
 from .template import SpeedTemplate, assemble_model, model_speed_plan
 
 __all__ = ["Assembled", "Model"]
+
+_P = ParamSpec("_P")
+_R = TypeVar("_R")
+
+
+def _recorded(method: Callable[_P, _R]) -> Callable[_P, _R]:
+    """Record a successful ``add_*`` call (its explicit arguments) in ``model.calls``: the
+    model file is these calls one to one (:meth:`Model.to_toml`)."""
+    sig = inspect.signature(method)
+
+    @functools.wraps(method)
+    def wrapper(*args: _P.args, **kwargs: _P.kwargs) -> _R:
+        out = method(*args, **kwargs)
+        bound = sig.bind(*args, **kwargs).arguments
+        model = bound.pop("self")
+        model.calls.append((method.__name__, dict(bound)))
+        return out
+
+    return wrapper
 
 
 @dataclass
@@ -72,6 +94,25 @@ class Model:
         self.meshes: dict[str, dict[str, Any]] = {}
         self.forces: dict[str, dict[str, Any]] = {}
         self.gravity: np.ndarray | None = None
+        #: ``(method, arguments)`` of every ``add_*``/``set_gravity`` call, in order.
+        self.calls: list[tuple[str, dict[str, Any]]] = []
+
+    @classmethod
+    def from_ross(cls, rotor: Any) -> Model:
+        """A model from a ROSS rotor: a ``ross.Rotor``, a file it saved (``.toml``/``.json``)
+        or that file read into a dict; see :mod:`rheolin.io.ross` (ROSS is not needed for
+        files)."""
+        from ..io.ross import model_from_ross
+
+        return model_from_ross(rotor)
+
+    def to_toml(self, path: str | Path | None = None) -> str:
+        """The model file (docs/model-format.md) of this model, SI units; written atomically
+        to ``path`` when given. Loading it gives identical matrices (:mod:`rheolin.io.writer`).
+        """
+        from ..io.writer import model_to_toml
+
+        return model_to_toml(self, path)
 
     # ------------------------------------------------------------------ bodies
     def _new_body(self, name: str, field_name: str = "name") -> None:
@@ -80,6 +121,7 @@ class Model:
         if name in self.bodies:
             raise ModelError(f"`{field_name}`: a body named {name!r} already exists")
 
+    @_recorded
     def add_shaft(
         self,
         name: str,
@@ -182,6 +224,7 @@ class Model:
         }
         self.bodies[name] = _Body(name, "shaft", e, pts, ratio, data)
 
+    @_recorded
     def add_shaft_layer(
         self,
         shaft: str,
@@ -248,6 +291,7 @@ class Model:
             )
         )
 
+    @_recorded
     def add_rigid_body(
         self,
         name: str,
@@ -265,6 +309,7 @@ class Model:
         self.bodies[name] = _Body(name, "rigid", e, pts, ratio)
         self.bodies[name].disks[0] = RigidNode(mass, np.asarray(inertia, dtype=float))
 
+    @_recorded
     def add_condensed_body(
         self,
         name: str,
@@ -331,6 +376,7 @@ class Model:
         e = unit_axis(axis, "axis")
         self.bodies[name] = _Body(name, "condensed", e, pts, ratio, {"condensed": cb})
 
+    @_recorded
     def add_disk(
         self,
         body: str,
@@ -377,6 +423,7 @@ class Model:
         b.disks[node] = rn
 
     # ------------------------------------------------------------------ joints and loads
+    @_recorded
     def add_bearing(
         self,
         name: str,
@@ -461,6 +508,7 @@ class Model:
             return j["table"].at(speed)
         return j["K"], j["D"], j["M"]
 
+    @_recorded
     def add_gear_mesh(
         self,
         name: str,
@@ -528,6 +576,7 @@ class Model:
             center_direction=center_direction,
         )
 
+    @_recorded
     def add_force(
         self,
         name: str,
@@ -558,6 +607,7 @@ class Model:
             reference=ref,
         )
 
+    @_recorded
     def set_gravity(self, gravity: Sequence[float] = (0.0, -9.81, 0.0)) -> None:
         """Uniform gravity [m/s^2] in global axes (static load ``M g`` on every body)."""
         g = np.asarray(gravity, dtype=float).ravel()
