@@ -26,6 +26,7 @@ from rich.table import Table
 
 from . import __version__
 from ._cli_report import parse_speed, parse_speeds, print_summary
+from ._cli_ross import register as _register_ross
 from .errors import ModelError
 from .harmonics import TruncationWarning
 
@@ -391,6 +392,9 @@ def demo(out: Path = DEMO_OUT) -> None:
         ),
     )
     raise typer.Exit(code)
+
+
+_register_ross(app)
 
 
 def _invoke(args: list[str]) -> int:

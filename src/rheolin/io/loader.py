@@ -143,7 +143,7 @@ def _joint_matrix(value: Any, components: list[str], kind: str, path: str) -> np
     trans = [c.startswith("u") for c in components]
 
     def unit_kind(i: int, j: int) -> str:
-        base = {"stiffness": "stiffness", "damping": "damping"}[kind]
+        base = {"stiffness": "stiffness", "damping": "damping", "mass": "mass_coefficient"}[kind]
         if trans[i] and trans[j]:
             return base
         if not trans[i] and not trans[j]:
@@ -174,6 +174,20 @@ def _joint_matrix(value: Any, components: list[str], kind: str, path: str) -> np
     return np.array(
         [[conv(x, i, j, f"{path}[{i}][{j}]") for j, x in enumerate(r)] for i, r in enumerate(value)]
     )
+
+
+def _one(value: Any) -> Any:
+    """A one-entry list as its value (per shaft), a longer one as is (per element)."""
+    return value[0] if isinstance(value, list) and len(value) == 1 else value
+
+
+def _table(value: Any, n: int, comps: list[str], kind: str, path: str) -> list[np.ndarray]:
+    """One coefficient matrix per speed: a list of ``n`` entries, or one value for all."""
+    if not isinstance(value, list):
+        return [_joint_matrix(value, comps, kind, path)] * n
+    if len(value) != n:
+        raise ModelError(f"{path}: give one entry per speed ({n}), got {len(value)}")
+    return [_joint_matrix(x, comps, kind, f"{path}[{i}]") for i, x in enumerate(value)]
 
 
 class _Builder:
@@ -256,21 +270,32 @@ class _Builder:
             if len(b.origin) != 3:
                 raise ModelError(f"{path}.origin: must be a 3-vector of lengths")
             sec = None if b.section is None else general_section(**b.section.model_dump())
-            od, idi = b.outer_diameter, b.inner_diameter
+            for key in ("elastic_modulus", "density", "shear_modulus", "poisson_ratio",
+                        "outer_diameter_right", "inner_diameter_right"):  # fmt: skip
+                v = getattr(b, key)
+                if isinstance(v, list) and len(v) not in (1, n_el):
+                    raise ModelError(f"{path}.{key}: give one value or one per element ({n_el})")
             self.model.add_shaft(
                 b.name,
                 b.positions,
-                outer_diameter=None if od is None else (od[0] if len(od) == 1 else od),
-                inner_diameter=idi[0] if len(idi) == 1 else idi,
-                elastic_modulus=b.elastic_modulus,
-                poisson_ratio=b.poisson_ratio,
-                density=b.density,
+                outer_diameter=_one(b.outer_diameter),
+                inner_diameter=_one(b.inner_diameter),
+                elastic_modulus=_one(b.elastic_modulus),
+                poisson_ratio=_one(b.poisson_ratio),
+                density=_one(b.density),
                 material_damping=b.material_damping,
                 axis=b.axis,
                 origin=b.origin,
                 section=sec,
                 speed_ratio=ratio,
+                shear_modulus=_one(b.shear_modulus),
+                outer_diameter_right=_one(b.outer_diameter_right),
+                inner_diameter_right=_one(b.inner_diameter_right),
             )
+            for i, layer in enumerate(b.layers):
+                kw = {k: _one(v) for k, v in layer.model_dump(exclude={"elements"}).items()}
+                self._call(f"{path}.layers[{i}]", self.model.add_shaft_layer, b.name,
+                           layer.elements, **kw)  # fmt: skip
         elif isinstance(b, CondensedBody):
             if not b.positions or any(len(x) != 3 for x in b.positions):
                 raise ModelError(f"{path}.positions: give one 3-vector of lengths per node")
@@ -296,11 +321,21 @@ class _Builder:
         comps: list[str] = list(COMPONENTS) if j.components == "all" else list(j.components)
         if len(set(comps)) != len(comps):
             raise ModelError(f"{p}.components: repeated component names")
-        K = _joint_matrix(j.stiffness, comps, "stiffness", f"{p}.stiffness")
-        D = _joint_matrix(j.damping, comps, "damping", f"{p}.damping")
-        if np.any(np.diag(K) < 0) or np.any(np.diag(D) < 0):
-            which = "stiffness" if np.any(np.diag(K) < 0) else "damping"
-            raise ModelError(f"{p}.{which}: diagonal entries must be >= 0")
+        K: Any
+        D: Any
+        Ma: Any
+        if j.speeds is None:
+            K = _joint_matrix(j.stiffness, comps, "stiffness", f"{p}.stiffness")
+            D = _joint_matrix(j.damping, comps, "damping", f"{p}.damping")
+            Ma = _joint_matrix(j.mass, comps, "mass", f"{p}.mass")
+        else:
+            K, D, Ma = (
+                np.array(_table(getattr(j, k), len(j.speeds), comps, k, f"{p}.{k}"))
+                for k in ("stiffness", "damping", "mass")
+            )
+        for which, X in (("stiffness", K), ("damping", D)):
+            if np.any(np.diagonal(X, axis1=-2, axis2=-1) < 0):
+                raise ModelError(f"{p}.{which}: diagonal entries must be >= 0")
         self._call(
             p,
             self.model.add_bearing,
@@ -313,6 +348,10 @@ class _Builder:
             j.other_body,
             j.other_node,
             j.frame,
+            mass=Ma,
+            speeds=j.speeds,
+            interpolation=j.interpolation,
+            extrapolate=j.extrapolate,
         )
 
     def _mesh(self, m: Any, p: str) -> None:

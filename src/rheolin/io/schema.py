@@ -91,6 +91,9 @@ VecLength = Annotated[list[float], BeforeValidator(_vector("length"))]
 VecLengthPos = Annotated[list[float], BeforeValidator(_vector("length", "+"))]
 VecLengthNonNeg = Annotated[list[float], BeforeValidator(_vector("length", "0+"))]
 VecMoment = Annotated[list[float], BeforeValidator(_vector("moment"))]
+VecPressurePos = Annotated[list[float], BeforeValidator(_vector("pressure", "+"))]
+VecDensityNonNeg = Annotated[list[float], BeforeValidator(_vector("density", "0+"))]
+VecSpeedNonNeg = Annotated[list[float], BeforeValidator(_vector("speed", "0+"))]
 Index = Annotated[int, Field(ge=0, strict=True)]
 Name = Annotated[str, Field(min_length=1)]
 Raw = float | int | str | list[Any]  # matrices whose units depend on components
@@ -143,41 +146,70 @@ class Disk(_Strict):
     @field_validator("inertia")
     @classmethod
     def _inertia(cls, value: list[Any] | None) -> list[Any] | None:
-        if value is None:
-            return None
-        conv = _quantity("inertia")
-        try:
-            rows = [[conv(x) for x in r] for r in value] if isinstance(value[0], list) else None
-            J = np.array(rows) if rows is not None else np.diag([conv(x) for x in value])
-        except (UnitError, TypeError, IndexError) as exc:
-            raise ValueError(f"must be 3 values or a 3x3 matrix of inertias: {exc}") from None
-        if J.shape != (3, 3):
-            raise ValueError(f"must be 3 values or a 3x3 matrix, got shape {J.shape}")
-        scale = float(np.abs(J).max(initial=0.0))
-        if not np.allclose(J, J.T, rtol=0.0, atol=1e-9 * scale):
-            raise ValueError("the inertia (mass) matrix must be symmetric")
-        if scale == 0.0 or np.linalg.eigvalsh(0.5 * (J + J.T)).min() <= 0.0:
-            eig = np.linalg.eigvalsh(0.5 * (J + J.T))
-            raise ValueError(
-                f"the inertia (mass) matrix must be positive definite; eigenvalues {eig}"
-            )
-        return J.tolist()
+        return _inertia_matrix(value, definite=False)
+
+
+def _inertia_matrix(value: list[Any] | None, definite: bool = True) -> list[Any] | None:
+    """3 values or a 3x3 symmetric matrix of inertias, positive (semi-)definite."""
+    if value is None:
+        return None
+    conv = _quantity("inertia")
+    try:
+        rows = [[conv(x) for x in r] for r in value] if isinstance(value[0], list) else None
+        J = np.array(rows) if rows is not None else np.diag([conv(x) for x in value])
+    except (UnitError, TypeError, IndexError) as exc:
+        raise ValueError(f"must be 3 values or a 3x3 matrix of inertias: {exc}") from None
+    if J.shape != (3, 3):
+        raise ValueError(f"must be 3 values or a 3x3 matrix, got shape {J.shape}")
+    scale = float(np.abs(J).max(initial=0.0))
+    if not np.allclose(J, J.T, rtol=0.0, atol=1e-9 * scale):
+        raise ValueError("the inertia (mass) matrix must be symmetric")
+    eig = np.linalg.eigvalsh(0.5 * (J + J.T))
+    if definite and (scale == 0.0 or eig.min() <= 0.0):
+        raise ValueError(f"the inertia (mass) matrix must be positive definite; eigenvalues {eig}")
+    if eig.min() < -1e-12 * scale:
+        raise ValueError(
+            "the inertia (mass) matrix must be positive definite (or semi-definite for a "
+            f"point mass); eigenvalues {eig}"
+        )
+    return J.tolist()
 
 
 Components = Literal["all"] | list[Literal["ux", "uy", "uz", "phix", "phiy", "phiz"]]
 
 
 class Bearing(_Strict):
-    """``Model.add_bearing`` (the body is the enclosing shaft or rigid body)."""
+    """``Model.add_bearing`` (the body is the enclosing shaft or rigid body).
+
+    With ``speeds`` (of the bearing's body), ``stiffness``, ``damping`` and ``mass`` are
+    lists with one entry per speed (or one value for every speed)."""
 
     name: Name
     node: Index
     stiffness: Raw = 0.0
     damping: Raw = 0.0
+    mass: Raw = 0.0
     components: Components = ["ux", "uy"]
     other_body: Name | None = None
     other_node: Index | None = None
     frame: Name | None = None
+    speeds: VecSpeedNonNeg | None = None
+    interpolation: Literal["cubic", "linear", "pchip", "akima", "smoothing"] = "cubic"
+    extrapolate: bool = False
+
+
+class ShaftLayer(_Strict):
+    """``Model.add_shaft_layer``: a concentric layer (sleeve, hub) over some elements."""
+
+    elements: list[Index]
+    outer_diameter: VecLengthPos
+    inner_diameter: VecLengthNonNeg = [0.0]
+    outer_diameter_right: VecLengthPos | None = None
+    inner_diameter_right: VecLengthNonNeg | None = None
+    elastic_modulus: PressurePos = 2.1e11
+    poisson_ratio: float | None = Field(default=None, gt=-1.0, lt=0.5)
+    shear_modulus: PressurePos | None = None
+    density: DensityNonNeg = 7850.0
 
 
 class _Body(_Strict):
@@ -201,12 +233,16 @@ class Shaft(_Body):
     positions: VecLength
     outer_diameter: VecLengthPos | None = None
     inner_diameter: VecLengthNonNeg = [0.0]
-    elastic_modulus: PressurePos = 2.1e11
-    poisson_ratio: float = Field(default=0.3, gt=-1.0, lt=0.5)
-    density: DensityNonNeg = 7850.0
+    outer_diameter_right: VecLengthPos | None = None
+    inner_diameter_right: VecLengthNonNeg | None = None
+    elastic_modulus: VecPressurePos = [2.1e11]
+    poisson_ratio: list[Annotated[float, Field(gt=-1.0, lt=0.5)]] | float | None = None
+    shear_modulus: VecPressurePos | None = None
+    density: VecDensityNonNeg = [7850.0]
     material_damping: TimeNonNeg = 0.0
     origin: VecLength = [0.0, 0.0, 0.0]
     section: Section | None = None
+    layers: list[ShaftLayer] = []
 
 
 class RigidBody(_Body):
@@ -216,7 +252,10 @@ class RigidBody(_Body):
     mass: MassPos
     inertia: list[Any]
 
-    _inertia = field_validator("inertia")(Disk._inertia.__func__)  # type: ignore[attr-defined]
+    @field_validator("inertia")
+    @classmethod
+    def _inertia(cls, value: list[Any]) -> list[Any] | None:
+        return _inertia_matrix(value, definite=True)
 
 
 class CondensedBody(_Body):

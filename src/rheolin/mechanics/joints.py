@@ -154,11 +154,13 @@ def coupling_speed_term(
     damping: np.ndarray | None,
     spin: int = 0,
     axis: ArrayLike = (0.0, 0.0, 1.0),
+    mass: np.ndarray | None = None,
 ) -> SpeedTerm:
     """:func:`coupling_term` as a polynomial in ``w1``: the circulatory stiffness of the
     rotating damping ``Rt C Rt'^T`` is its linear part, the rest is constant.
 
-    ``nodes`` holds the DOFs of both nodes (``None``: ground).
+    ``nodes`` holds the DOFs of both nodes (``None``: ground); ``mass`` is an added mass on
+    the relative acceleration (seals, squeeze films), in the same axes as the stiffness.
 
     >>> t = coupling_speed_term((range(6), None), None, expand_matrix(2.0, ["ux", "uy"]), spin=1)
     >>> sorted(t.K), t.K[1][0][:2, :2] + 0.0
@@ -169,7 +171,10 @@ def coupling_speed_term(
         raise ModelError(f"`spin` must be an integer harmonic, got {spin!r}")
     K: dict[int, dict[int, np.ndarray]] = {}
     D: dict[int, dict[int, np.ndarray]] = {}
+    M: dict[int, dict[int, np.ndarray]] = {}
     s = int(spin)
+    if mass is not None and np.any(mass):
+        M[0] = rotate_body_matrix(np.asarray(mass, float), axis, s)
     if stiffness is not None:
         K[0] = rotate_body_matrix(np.asarray(stiffness, float), axis, s)
     if damping is not None:
@@ -178,7 +183,7 @@ def coupling_speed_term(
         if s != 0:
             K[1] = circulatory_matrix(C, axis, s, 1.0)
     dofs, _ = _pair(dofs_a, dofs_b, {})
-    for X in (K, D):
+    for X in (K, D, M):
         for p in X:
             X[p] = _pair(dofs_a, dofs_b, X[p])[1]
-    return SpeedTerm(dofs, K=K, D=D)
+    return SpeedTerm(dofs, M=M, K=K, D=D)

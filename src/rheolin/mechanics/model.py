@@ -21,26 +21,50 @@ A rigid rotor on an anisotropic bearing with a static unbalance, turning at 100 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import functools
+import inspect
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any
+from pathlib import Path
+from typing import Any, ParamSpec, TypeVar
 
 import numpy as np
 
 from ..errors import ModelError
 from .assembly import Assembled
+from .bearing_table import SpeedTable
 from .condensed import CondensedBody, load_condensed
 from .gears import rectangular_wave_coefficients
 from .joints import expand_matrix
 from .rigid import RigidNode, disk, static_unbalance
 from .rigid import couple_unbalance as _add_couple
 from .rotation import unit_axis
-from .sections import Material, Section, hollow_circular, solid_circular
+from .sections import Section, element_materials
+from .shaft import ShaftLayer, circular_layer
 from .speeds import GearPair, SpeedPlan
 from .template import SpeedTemplate, assemble_model, model_speed_plan
 
 __all__ = ["Assembled", "Model"]
+
+_P = ParamSpec("_P")
+_R = TypeVar("_R")
+
+
+def _recorded(method: Callable[_P, _R]) -> Callable[_P, _R]:
+    """Record a successful ``add_*`` call (its explicit arguments) in ``model.calls``: the
+    model file is these calls one to one (:meth:`Model.to_toml`)."""
+    sig = inspect.signature(method)
+
+    @functools.wraps(method)
+    def wrapper(*args: _P.args, **kwargs: _P.kwargs) -> _R:
+        out = method(*args, **kwargs)
+        bound = sig.bind(*args, **kwargs).arguments
+        model = bound.pop("self")
+        model.calls.append((method.__name__, dict(bound)))
+        return out
+
+    return wrapper
 
 
 @dataclass
@@ -70,6 +94,25 @@ class Model:
         self.meshes: dict[str, dict[str, Any]] = {}
         self.forces: dict[str, dict[str, Any]] = {}
         self.gravity: np.ndarray | None = None
+        #: ``(method, arguments)`` of every ``add_*``/``set_gravity`` call, in order.
+        self.calls: list[tuple[str, dict[str, Any]]] = []
+
+    @classmethod
+    def from_ross(cls, rotor: Any) -> Model:
+        """A model from a ROSS rotor: a ``ross.Rotor``, a file it saved (``.toml``/``.json``)
+        or that file read into a dict; see :mod:`rheolin.io.ross` (ROSS is not needed for
+        files)."""
+        from ..io.ross import model_from_ross
+
+        return model_from_ross(rotor)
+
+    def to_toml(self, path: str | Path | None = None) -> str:
+        """The model file (docs/model-format.md) of this model, SI units; written atomically
+        to ``path`` when given. Loading it gives identical matrices (:mod:`rheolin.io.writer`).
+        """
+        from ..io.writer import model_to_toml
+
+        return model_to_toml(self, path)
 
     # ------------------------------------------------------------------ bodies
     def _new_body(self, name: str, field_name: str = "name") -> None:
@@ -78,20 +121,24 @@ class Model:
         if name in self.bodies:
             raise ModelError(f"`{field_name}`: a body named {name!r} already exists")
 
+    @_recorded
     def add_shaft(
         self,
         name: str,
         positions: Sequence[float],
         outer_diameter: float | Sequence[float] | None = None,
         inner_diameter: float | Sequence[float] = 0.0,
-        elastic_modulus: float = 2.1e11,
-        poisson_ratio: float = 0.3,
-        density: float = 7850.0,
+        elastic_modulus: float | Sequence[float] = 2.1e11,
+        poisson_ratio: float | Sequence[float] | None = None,
+        density: float | Sequence[float] = 7850.0,
         material_damping: float = 0.0,
         axis: Sequence[float] = (0.0, 0.0, 1.0),
         origin: Sequence[float] = (0.0, 0.0, 0.0),
         section: Section | None = None,
         speed_ratio: Fraction | int | None = None,
+        shear_modulus: float | Sequence[float] | None = None,
+        outer_diameter_right: float | Sequence[float] | None = None,
+        inner_diameter_right: float | Sequence[float] | None = None,
     ) -> None:
         """A flexible shaft of Timoshenko elements with nodes along its spin axis.
 
@@ -102,9 +149,16 @@ class Model:
         positions
             Axial node coordinates [m] from ``origin`` along ``axis``, strictly increasing.
         outer_diameter, inner_diameter
-            Circular (tube) section, per shaft or per element [m].
-        elastic_modulus, poisson_ratio, density
-            Material [Pa], [-], [kg/m^3].
+            Circular (tube) section, per shaft or per element [m] (at the left node of each
+            element when the element is conical).
+        outer_diameter_right, inner_diameter_right
+            Diameters at the right node of each element [m] (default: the left ones); where
+            they differ the element is conical (:mod:`rheolin.mechanics.conical`).
+        elastic_modulus, density
+            Material [Pa], [kg/m^3], per shaft or per element.
+        poisson_ratio, shear_modulus
+            Give one of them (per shaft or per element): Poisson's ratio [-] or the shear
+            modulus ``G`` [Pa] that textbooks and ROSS give; default ``poisson_ratio=0.3``.
         material_damping
             Rotating material damping ``beta`` [s] (``D_B = beta K_B``).
         axis, origin
@@ -118,9 +172,11 @@ class Model:
         Examples
         --------
         >>> m = Model()
-        >>> m.add_shaft("s", [0.0, 0.25, 0.5], outer_diameter=0.03)
+        >>> m.add_shaft("s", [0.0, 0.25, 0.5], outer_diameter=0.03, shear_modulus=81e9)
         >>> m.bodies["s"].positions[:, 2]
         array([0.  , 0.25, 0.5 ])
+        >>> round(m.bodies["s"].data["layers"][0][0].material.nu, 4)
+        0.2963
         """
         self._new_body(name)
         z = np.asarray(positions, dtype=float).ravel()
@@ -129,29 +185,113 @@ class Model:
         e = unit_axis(axis, "axis")
         pts = np.asarray(origin, float) + np.outer(z, e)
         n_el = z.size - 1
-        material = Material(
-            E=_positive(elastic_modulus, "elastic_modulus"),
-            density=float(density),
-            nu=float(poisson_ratio),
-            damping_beta=float(material_damping),
+        materials = element_materials(
+            n_el, elastic_modulus, density, poisson_ratio, shear_modulus, material_damping
         )
         if section is not None:
             if not isinstance(section, Section):
                 raise ModelError("`section` must be a rheolin.mechanics.sections.Section")
-            sections = [section] * n_el
+            if outer_diameter_right is not None or inner_diameter_right is not None:
+                raise ModelError("`outer_diameter_right`/`inner_diameter_right` need diameters")
+            layers = [[ShaftLayer(mat, section=section)] for mat in materials]
         elif outer_diameter is None:
             raise ModelError("give `outer_diameter` (circular shaft) or `section`")
         else:
             do = _per_element(outer_diameter, n_el, "outer_diameter")
             di = _per_element(inner_diameter, n_el, "inner_diameter")
-            sections = [
-                hollow_circular(a, b, poisson_ratio) if b > 0 else solid_circular(a, poisson_ratio)
-                for a, b in zip(do, di, strict=True)
+            dor = (
+                do
+                if outer_diameter_right is None
+                else _per_element(outer_diameter_right, n_el, "outer_diameter_right")
+            )
+            dir_ = (
+                di
+                if inner_diameter_right is None
+                else _per_element(inner_diameter_right, n_el, "inner_diameter_right")
+            )
+            layers = [
+                [circular_layer(mat, a, b, c, d)]
+                for mat, a, b, c, d in zip(materials, do, di, dor, dir_, strict=True)
             ]
         ratio = None if speed_ratio is None else Fraction(speed_ratio)
-        data = {"lengths": np.diff(z), "sections": sections, "material": material}
+        sections = [lay[0].section for lay in layers]
+        data = {
+            "lengths": np.diff(z),
+            "layers": layers,
+            "sections": sections,
+            "material": materials[0],
+            "extra_layers": [],
+        }
         self.bodies[name] = _Body(name, "shaft", e, pts, ratio, data)
 
+    @_recorded
+    def add_shaft_layer(
+        self,
+        shaft: str,
+        elements: Sequence[int],
+        outer_diameter: float | Sequence[float],
+        inner_diameter: float | Sequence[float] = 0.0,
+        elastic_modulus: float = 2.1e11,
+        poisson_ratio: float | None = None,
+        density: float = 7850.0,
+        shear_modulus: float | None = None,
+        outer_diameter_right: float | Sequence[float] | None = None,
+        inner_diameter_right: float | Sequence[float] | None = None,
+    ) -> None:
+        """A concentric layer (sleeve, hub) added to some elements of a shaft.
+
+        The layer acts in parallel with the element's own section: its Timoshenko matrices,
+        with its own material and shear parameter, are added to the element's. A layer of
+        negligible ``elastic_modulus`` adds mass and rotary inertia only.
+
+        >>> m = Model()
+        >>> m.add_shaft("s", [0.0, 0.1, 0.2], outer_diameter=0.05)
+        >>> m.add_shaft_layer("s", [1], outer_diameter=0.08, inner_diameter=0.05, density=2700)
+        >>> [len(x) for x in m.bodies["s"].data["layers"]]
+        [1, 2]
+        """
+        b = self._body(shaft, "shaft")
+        if b.kind != "shaft":
+            raise ModelError(f"`shaft`: body {shaft!r} is a {b.kind} body, not a shaft")
+        n_el = len(b.positions) - 1
+        idx = [int(i) for i in np.atleast_1d(np.asarray(elements)).ravel()]
+        if not idx or any(not 0 <= i < n_el for i in idx):
+            raise ModelError(f"`elements` must be element indices in [0, {n_el}), got {elements!r}")
+        k = len(idx)
+        mats = element_materials(
+            k,
+            elastic_modulus,
+            density,
+            poisson_ratio,
+            shear_modulus,
+            b.data["material"].damping_beta,
+        )
+        do = _per_element(outer_diameter, k, "outer_diameter")
+        di = _per_element(inner_diameter, k, "inner_diameter")
+        dor = (
+            do
+            if outer_diameter_right is None
+            else _per_element(outer_diameter_right, k, "outer_diameter_right")
+        )
+        dir_ = (
+            di
+            if inner_diameter_right is None
+            else _per_element(inner_diameter_right, k, "inner_diameter_right")
+        )
+        for j, i in enumerate(idx):
+            b.data["layers"][i].append(circular_layer(mats[j], do[j], di[j], dor[j], dir_[j]))
+        b.data["extra_layers"].append(
+            dict(
+                elements=idx,
+                outer_diameter=do,
+                inner_diameter=di,
+                outer_diameter_right=dor,
+                inner_diameter_right=dir_,
+                materials=mats,
+            )
+        )
+
+    @_recorded
     def add_rigid_body(
         self,
         name: str,
@@ -169,6 +309,7 @@ class Model:
         self.bodies[name] = _Body(name, "rigid", e, pts, ratio)
         self.bodies[name].disks[0] = RigidNode(mass, np.asarray(inertia, dtype=float))
 
+    @_recorded
     def add_condensed_body(
         self,
         name: str,
@@ -235,6 +376,7 @@ class Model:
         e = unit_axis(axis, "axis")
         self.bodies[name] = _Body(name, "condensed", e, pts, ratio, {"condensed": cb})
 
+    @_recorded
     def add_disk(
         self,
         body: str,
@@ -281,6 +423,7 @@ class Model:
         b.disks[node] = rn
 
     # ------------------------------------------------------------------ joints and loads
+    @_recorded
     def add_bearing(
         self,
         name: str,
@@ -292,13 +435,31 @@ class Model:
         other_body: str | None = None,
         other_node: int | None = None,
         frame: str | None = None,
+        mass: Any = 0.0,
+        speeds: Sequence[float] | None = None,
+        interpolation: str = "cubic",
+        extrapolate: bool = False,
     ) -> None:
-        """A bearing or coupling from a node to ground (default) or to another body's node.
+        """A bearing, seal or coupling from a node to ground (default) or to another body's node.
 
-        ``stiffness`` / ``damping`` act on the relative displacement, over ``components``
-        (names from ``COMPONENTS``; None means all six): a scalar, a vector (diagonal) or a
-        matrix (cross-coupling, anisotropy). ``frame=None``: constant in the inertial frame;
-        ``frame="<body>"``: defined in that body's rotating axes.
+        ``stiffness`` / ``damping`` / ``mass`` (added mass) act on the relative displacement,
+        over ``components`` (names from ``COMPONENTS``; None means all six): a scalar, a
+        vector (diagonal) or a matrix (cross-coupling, anisotropy). ``frame=None``: constant
+        in the inertial frame; ``frame="<body>"``: defined in that body's rotating axes.
+
+        Speed-dependent coefficients (journal bearings, seals): give ``speeds`` [rad/s of the
+        bearing's ``body``] and one coefficient per speed in ``stiffness``, ``damping`` and
+        ``mass`` (a scalar is the same at every speed); they are interpolated by
+        ``interpolation`` (see :class:`~rheolin.mechanics.bearing_table.SpeedTable`) and
+        evaluated at the operating speed by every solver, Campbell diagram and stability map.
+
+        >>> m = Model()
+        >>> m.add_shaft("s", [0.0, 0.5], outer_diameter=0.05)
+        >>> m.add_bearing("b", "s", 0, stiffness=[[[1e7, 2e6], [-2e6, 1e7]], [[2e7, 4e6],
+        ...               [-4e6, 2e7]]], damping=[1e3, 2e3], speeds=[100.0, 300.0],
+        ...               interpolation="linear")
+        >>> float(m.bearing_coefficients("b", 200.0)[0][0, 1])
+        3000000.0
         """
         self._new_item(name, self.joints)
         b = self._body(body, "body")
@@ -309,12 +470,45 @@ class Model:
             self._node(self._body(other_body, "other_body"), other_node)
         if frame is not None:
             self._body(frame, "frame")
-        K = expand_matrix(stiffness, components, "stiffness")
-        D = expand_matrix(damping, components, "damping")
+        table = None
+        if speeds is None:
+            K = expand_matrix(stiffness, components, "stiffness")
+            D = expand_matrix(damping, components, "damping")
+            M = expand_matrix(mass, components, "mass")
+        else:
+            if frame is not None:
+                raise ModelError("`speeds`: speed-dependent coefficients need `frame=None`")
+            n = np.asarray(speeds, dtype=float).size
+            tabs = [
+                _per_speed(x, n, components, fld)
+                for x, fld in ((stiffness, "stiffness"), (damping, "damping"), (mass, "mass"))
+            ]
+            table = SpeedTable(speeds, tabs[0], tabs[1], tabs[2], interpolation, bool(extrapolate))
+            K, D, M = (np.zeros((6, 6)) for _ in range(3))
         self.joints[name] = dict(
-            body=body, node=node, other=(other_body, other_node), K=K, D=D, frame=frame
+            body=body,
+            node=node,
+            other=(other_body, other_node),
+            K=K,
+            D=D,
+            M=M,
+            frame=frame,
+            table=table,
+            components=None if components is None else list(components),
         )
 
+    def bearing_coefficients(
+        self, name: str, speed: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(K, D, M)`` (6x6) of joint ``name`` at its body's ``speed`` [rad/s]."""
+        if name not in self.joints:
+            raise ModelError(f"`name`: no bearing {name!r}; bearings: {list(self.joints)}")
+        j = self.joints[name]
+        if j["table"] is not None:
+            return j["table"].at(speed)
+        return j["K"], j["D"], j["M"]
+
+    @_recorded
     def add_gear_mesh(
         self,
         name: str,
@@ -382,6 +576,7 @@ class Model:
             center_direction=center_direction,
         )
 
+    @_recorded
     def add_force(
         self,
         name: str,
@@ -412,6 +607,7 @@ class Model:
             reference=ref,
         )
 
+    @_recorded
     def set_gravity(self, gravity: Sequence[float] = (0.0, -9.81, 0.0)) -> None:
         """Uniform gravity [m/s^2] in global axes (static load ``M g`` on every body)."""
         g = np.asarray(gravity, dtype=float).ravel()
@@ -468,6 +664,16 @@ def _positive(x: Any, name: str) -> float:
     if not np.isfinite(v) or v <= 0:
         raise ModelError(f"`{name}` must be a positive finite number, got {x!r}")
     return v
+
+
+def _per_speed(value: Any, n: int, components: Sequence[str] | None, name: str) -> np.ndarray:
+    """One 6x6 matrix per speed from a table (or one value for every speed)."""
+    a = np.asarray(value, dtype=float)
+    if a.ndim == 0:
+        return np.array([expand_matrix(float(a), components, name)] * n)
+    if a.shape[0] != n:
+        raise ModelError(f"`{name}`: give one entry per speed ({n}), got {a.shape[0]}")
+    return np.array([expand_matrix(x, components, f"{name}[{i}]") for i, x in enumerate(a)])
 
 
 def _per_element(x: Any, n: int, name: str) -> np.ndarray:

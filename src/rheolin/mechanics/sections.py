@@ -17,6 +17,7 @@ from ..errors import ModelError
 __all__ = [
     "Material",
     "Section",
+    "element_materials",
     "general_section",
     "hollow_circular",
     "rectangular",
@@ -203,3 +204,43 @@ def rectangular(width_y: float, height_z: float, nu: float = 0.3) -> Section:
     Jt = a * b**3 * (1.0 / 3.0 - 0.21 * (b / a) * (1.0 - b**4 / (12.0 * a**4)))
     kappa = 10.0 * (1.0 + nu) / (12.0 + 11.0 * nu)
     return Section(b_y * h_z, b_y * h_z**3 / 12.0, h_z * b_y**3 / 12.0, Jt, kappa, kappa)
+
+
+def element_materials(
+    n: int,
+    elastic_modulus: object,
+    density: object,
+    poisson_ratio: object | None = None,
+    shear_modulus: object | None = None,
+    damping_beta: float = 0.0,
+) -> list[Material]:
+    """One :class:`Material` per element from values given per shaft or per element.
+
+    Give ``poisson_ratio`` or ``shear_modulus`` (not both); neither means ``nu = 0.3``.
+
+    >>> [m.G for m in element_materials(2, 2e11, 7800.0, shear_modulus=[8e10, 7e10])]
+    [80000000000.0, 70000000000.0]
+    """
+
+    def each(value: object, name: str) -> np.ndarray:
+        a = np.asarray(value, dtype=float).ravel()
+        if a.size == 1:
+            a = np.full(n, a[0])
+        if a.size != n:
+            raise ModelError(f"`{name}` must be one value or one per element ({n}), got {a.size}")
+        return a
+
+    if poisson_ratio is not None and shear_modulus is not None:
+        raise ModelError("give `poisson_ratio` or `shear_modulus`, not both")
+    E, rho = each(elastic_modulus, "elastic_modulus"), each(density, "density")
+    if shear_modulus is not None:
+        G = each(shear_modulus, "shear_modulus")
+        return [
+            Material(E=e, density=r, G=g, damping_beta=damping_beta)
+            for e, r, g in zip(E, rho, G, strict=True)
+        ]
+    nu = each(0.3 if poisson_ratio is None else poisson_ratio, "poisson_ratio")
+    return [
+        Material(E=e, density=r, nu=v, damping_beta=damping_beta)
+        for e, r, v in zip(E, rho, nu, strict=True)
+    ]

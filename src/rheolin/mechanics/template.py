@@ -21,10 +21,12 @@ from ..errors import ModelError
 from ..system import PeriodicSystem
 from ._term import SpeedTerm, Term
 from .assembly import Assembled
-from .beam import beam_body_matrices, beam_speed_term
+from .beam import beam_speed_term
+from .bearing_table import SpeedTable
 from .gears import gear_mesh_term, line_of_action
 from .joints import COMPONENTS, coupling_speed_term
 from .loads import gravity_load, harmonic_force_term
+from .shaft import element_matrices
 from .speeds import SpeedPlan, propagate_speeds, speed_plan
 
 if TYPE_CHECKING:
@@ -73,11 +75,23 @@ class _Coefficient:
             self.patterns[k] = (rows, cols, values)
         self._parts = {}
 
-    def at(self, w1: float) -> dict[int, sp.csr_array]:
-        """The coefficients ``{k: X_k}`` (``k >= 0``) at ``w1``; exact zeros dropped."""
+    def slots(self, dofs: np.ndarray) -> np.ndarray:
+        """Positions of the ``dofs x dofs`` block (row-major) in harmonic 0's values."""
+        rows, cols, _ = self.patterns[0]
+        keys = (np.repeat(dofs, dofs.size) * self.n + np.tile(dofs, dofs.size)).astype(np.int64)
+        return np.searchsorted(rows * self.n + cols, keys)
+
+    def at(
+        self, w1: float, extra: list[tuple[np.ndarray, np.ndarray]] | None = None
+    ) -> dict[int, sp.csr_array]:
+        """The coefficients ``{k: X_k}`` (``k >= 0``) at ``w1``, plus ``extra`` ``(slots,
+        values)`` on harmonic 0 (speed-dependent joints); exact zeros dropped."""
         out: dict[int, sp.csr_array] = {}
         for k, (rows, cols, (x0, x1, x2)) in self.patterns.items():
             data = x0 + w1 * x1 + (w1 * w1) * x2
+            if k == 0 and extra:
+                for slot, vals in extra:
+                    np.add.at(data, slot, vals)
             keep = data != 0
             if not keep.any():
                 continue
@@ -129,14 +143,23 @@ class SpeedTemplate:
         dof = {key: 6 * v + np.arange(6) for key, v in self.node_index.items()}
         terms = self._body_terms(model)
         self.joints: dict[str, SpeedTerm] = {}
+        #: speed-dependent joints: name -> (table, |speed ratio| of its body, DOFs)
+        self.tables: dict[str, tuple[SpeedTable, float, np.ndarray]] = {}
         for name, j in model.joints.items():
             other = None if j["other"][0] is None else dof[j["other"]]
             frame = j["frame"]
             s = 0 if frame is None else plan.spin[frame]
             axis = (0.0, 0.0, 1.0) if frame is None else model.bodies[frame].axis
             self.joints[name] = coupling_speed_term(
-                (dof[(j["body"], j["node"])], other), j["K"], j["D"], s, axis
+                (dof[(j["body"], j["node"])], other), j["K"], j["D"], s, axis, j.get("M")
             )
+            table = j.get("table")
+            if table is not None:  # zeros now: the pattern; values per speed in `system`
+                ratio = abs(float(plan.ratios[j["body"]]))
+                jt = self.joints[name]
+                z = {0: {0: np.zeros((jt.dofs.size, jt.dofs.size))}}
+                self.joints[name] = SpeedTerm(jt.dofs, M=z, D=z, K=z)
+                self.tables[name] = (table, ratio, np.asarray(jt.dofs))
         self.meshes: dict[str, tuple[Term, np.ndarray, int]] = {}
         for (name, g), harmonic in zip(model.meshes.items(), plan.mesh, strict=True):
             w = _mesh_vector(model, g, plan)
@@ -169,12 +192,10 @@ class SpeedTemplate:
             first = self.node_index[(b.name, 0)]
             if b.kind == "shaft":
                 data = b.data
-                for i, (length, section) in enumerate(
-                    zip(data["lengths"], data["sections"], strict=True)
+                for i, (length, layers) in enumerate(
+                    zip(data["lengths"], data["layers"], strict=True)
                 ):
-                    mats = beam_body_matrices(
-                        float(length), section, data["material"], b.axis, data.get("y_axis")
-                    )
+                    mats = element_matrices(float(length), layers, b.axis, data.get("y_axis"))
                     terms.append(beam_speed_term((first + i, first + i + 1), mats, b.axis, s))
             elif b.kind == "condensed":
                 local = b.data["condensed"]
@@ -210,6 +231,23 @@ class SpeedTemplate:
                         np.add.at(out[p], dofs, fk)
         for c in (self._M, self._D, self._K):
             c.freeze()
+        self._slots = {
+            name: {c.name: c.slots(d) for c in (self._M, self._D, self._K)}
+            for name, (_, _, d) in self.tables.items()
+        }
+
+    def table_blocks(
+        self, speed: float
+    ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+        """``(dofs, K, D, M)`` of every speed-dependent joint at input ``speed`` [rad/s]
+        (blocks on the joint's DOFs, node-to-node pairs expanded)."""
+        out = []
+        for _, (table, ratio, dofs) in self.tables.items():
+            K, D, M = table.at(ratio * speed)
+            if dofs.size == 12:
+                K, D, M = (np.block([[x, -x], [-x, x]]) for x in (K, D, M))
+            out.append((dofs, K, D, M))
+        return out
 
     @property
     def time_invariant(self) -> bool:
@@ -219,7 +257,8 @@ class SpeedTemplate:
     def mean_polynomials(self) -> dict[str, np.ndarray]:
         """Dense ``X_0^(p)`` of ``M, D, K`` (shape ``(3, n, n)``, power ``p`` of ``w1`` first).
 
-        For batched solves of small time-invariant models over many speeds.
+        For batched solves of small time-invariant models over many speeds. Speed-dependent
+        joints are not in it: add :meth:`table_blocks` at each speed.
         """
         out = {}
         for c in (self._M, self._D, self._K):
@@ -241,7 +280,21 @@ class SpeedTemplate:
             v = f0 + w1 * f1 + (w1 * w1) * f2
             if np.any(v != 0):
                 f[k] = v.real.copy() if k == 0 else v
-        return PeriodicSystem(omega=w1, M=self._M.at(w1), D=self._D.at(w1), K=self._K.at(w1), f=f)
+        extra: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {"K": [], "D": [], "M": []}
+        if self.tables:
+            speed = w1 / float(self.plan.base)
+            for (_, K, D, M), slot in zip(
+                self.table_blocks(speed), self._slots.values(), strict=True
+            ):
+                for key, X in (("K", K), ("D", D), ("M", M)):
+                    extra[key].append((slot[key], X.ravel()))
+        return PeriodicSystem(
+            omega=w1,
+            M=self._M.at(w1, extra["M"]),
+            D=self._D.at(w1, extra["D"]),
+            K=self._K.at(w1, extra["K"]),
+            f=f,
+        )
 
     def assemble(self, speed: float) -> Assembled:
         """The model at input speed ``speed`` [rad/s] (> 0), as ``Model.assemble`` gives it."""
@@ -250,6 +303,10 @@ class SpeedTemplate:
             raise ModelError(f"`speed` must be a positive finite number, got {speed!r}")
         w1 = float(self.plan.base) * speed
         joints = {name: t.at(w1) for name, t in self.joints.items()}
+        for (name, (_, _, dofs)), (_, K, D, M) in zip(
+            self.tables.items(), self.table_blocks(speed), strict=True
+        ):
+            joints[name] = Term(dofs, M={0: M}, D={0: D}, K={0: K})
         return Assembled(
             self.system(w1),
             w1,

@@ -107,6 +107,12 @@ def lti_speeds(
         sv = 1j * w[:, None] * ns[None, :]  # (speeds, harmonics)
         C = np.stack([sv**ws * (w**p)[:, None] for ws, p in powers], axis=-1)
         A = (C.reshape(-1, len(powers)) @ B).reshape(w.size, ns.size, n, n)
+        if template.tables:  # speed-dependent bearings, evaluated at each speed
+            for i, speed in enumerate(speeds[start : start + step]):
+                for dofs, Kt, Dt, Mt in template.table_blocks(float(speed)):
+                    idx = np.ix_(dofs, dofs)
+                    for j, sj in enumerate(sv[i]):
+                        A[i, j][idx] += Kt + sj * Dt + sj * sj * Mt
         F = np.stack([_load(f_poly, loads, w, int(k), n) for k in ns], axis=1)
         with np.errstate(all="ignore"):
             Q = np.linalg.solve(A, F[..., None])[..., 0]
