@@ -16,7 +16,7 @@ demo: $(STAMP)
 	$(BIN)/rheolin example gearbox > demo_gearbox.toml
 	$(BIN)/rheolin run demo_gearbox.toml --out demo_results/run
 	$(BIN)/rheolin sweep demo_gearbox.toml --speeds 1500:4500:500rpm \
-		--out demo_results/sweep --no-stability-map
+		--out demo_results/sweep
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests bench

@@ -24,8 +24,8 @@ RPM = 60.0 / (2.0 * np.pi)
 def plot_stability(map: Any, path: str | Path) -> Path:
     """Stability map as a PNG.
 
-    Largest Floquet real part [1/s] against input speed [rpm] (symmetric-log axis so that
-    damped and growing values both show), the per-speed decision tolerance as a grey band,
+    Largest Floquet real part [1/s] against input speed [rpm] (symmetric-log axis when
+    damped and growing values must both show, else linear up to zero), the per-speed decision tolerance as a grey band,
     unstable samples as red dots, unstable ranges shaded red and labelled with their bounds
     and mechanism; speeds whose verdict the truncation could still flip are marked with crosses.
 
@@ -55,7 +55,11 @@ def plot_stability(map: Any, path: str | Path) -> Path:
     finite = np.isfinite(mr)
     scale = float(np.nanmax(np.abs(mr[finite]))) if finite.any() else 1.0
     linthresh = max(1e-3 * scale, float(np.nanmax(tol)) if tol.size else 0.0, 1e-12)
-    ax.set_yscale("symlog", linthresh=linthresh)
+    growing = finite.any() and float(np.nanmax(mr[finite])) > -linthresh
+    if growing:  # damped and growing values both: a symmetric-log axis shows both
+        ax.set_yscale("symlog", linthresh=linthresh)
+    else:  # all damped: a linear axis from the most damped value up to the boundary
+        ax.set_ylim(-1.15 * scale, 0.15 * scale)
     ax.fill_between(rpm, -tol, tol, color="0.8", lw=0, label="decision tolerance")
     ax.plot(rpm, mr, "-", color="tab:blue", lw=1.2, label="largest Floquet real part")
     bad = ~np.asarray(map.stable, bool)
@@ -91,5 +95,5 @@ def plot_stability(map: Any, path: str | Path) -> Path:
     )
     ax.set_title(f"Floquet stability map: {status}")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8, loc="lower left")
+    ax.legend(fontsize=8, loc="best")
     return save(fig, path)
