@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import signal
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
@@ -20,6 +19,8 @@ from rich.progress import (
     TimeElapsedColumn,
     TimeRemainingColumn,
 )
+
+from ._cli_errors import EXIT_INPUT, EXIT_INTERRUPTED, plain_error, sigterm_as_interrupt
 
 __all__ = ["StudyBar", "print_study_summary", "run_sweep"]
 
@@ -45,8 +46,8 @@ def run_sweep(
     from .study.files import write_results
 
     def fail(message: str) -> int:
-        err.print(f"[red]error:[/red] {escape(message)}", highlight=False, soft_wrap=True)
-        return 2
+        plain_error(message)
+        return EXIT_INPUT
 
     try:
         spec = StudySpec.create(model, speeds, list(vary), Settings(**settings))
@@ -56,7 +57,7 @@ def run_sweep(
         return fail(str(exc))
     write = functools.partial(write_results, plots=plots, quantity=quantity)
     try:
-        with _client(scheduler) as client, _sigterm_as_interrupt(), StudyBar(err, spec) as bar:
+        with _client(scheduler) as client, sigterm_as_interrupt(), StudyBar(err, spec) as bar:
             result = run_study(spec, client=client, progress=bar, write=write, **run)
     except StudyInterrupted as exc:
         err.print(
@@ -65,7 +66,7 @@ def run_sweep(
             highlight=False,
             soft_wrap=True,
         )
-        return 130
+        return EXIT_INTERRUPTED
     except ModelError as exc:  # another study in the directory, a busy directory, --scheduler
         return fail(str(exc))
     print_study_summary(console, err, result)
@@ -90,20 +91,6 @@ def _client(address: str | None) -> Iterator[Any]:
         yield client
     finally:
         client.close()
-
-
-@contextlib.contextmanager
-def _sigterm_as_interrupt() -> Iterator[None]:
-    """SIGTERM (a batch system's stop) ends the study like Ctrl-C: finished chunks kept."""
-
-    def interrupt(signum: int, frame: Any) -> None:
-        raise KeyboardInterrupt
-
-    old = signal.signal(signal.SIGTERM, interrupt)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, old)
 
 
 class StudyBar:
@@ -185,8 +172,10 @@ def print_study_summary(console: Console, err: Console, result: Any) -> None:
         highlight=False,
     )
     if result.maps:
-        console.print("stability map unstable ranges (rpm): " + ("; ".join(ranges) or "none"))
+        console.print(
+            "stability map unstable ranges (rpm): " + ("; ".join(ranges) or "none"), markup=False
+        )
     for w in result.warnings:
-        err.print(f"[yellow]warning:[/yellow] {escape(w)}", highlight=False)
+        err.print(f"warning: {w}", markup=False, highlight=False, soft_wrap=True)
     if result.written:
         console.print("wrote " + ", ".join(str(p) for p in result.written), highlight=False)

@@ -20,7 +20,16 @@ from ..errors import ModelError
 from ..mechanics.joints import COMPONENTS
 from ..mechanics.model import Model
 from ..mechanics.sections import general_section
-from .schema import Bearing, CondensedBody, ModelFile, Shaft, field_path, table_class
+from .schema import (
+    MATERIALS,
+    Bearing,
+    CondensedBody,
+    ModelFile,
+    Shaft,
+    field_path,
+    material_constant,
+    table_class,
+)
 from .units import UnitError, to_si
 
 __all__ = ["LoadedModel", "load_model", "parse_document", "parse_model", "read_model"]
@@ -203,7 +212,8 @@ class _Builder:
         for path, b in bodies:
             for i, d in enumerate(b.disks):
                 self._node(b.name, d.node, f"{path}.disks[{i}].node")
-                kw = d.model_dump(exclude={"node"})
+                kw = d.model_dump(exclude={"node", "material"})
+                kw["density"] = self._disk_density(d, f"{path}.disks[{i}]", b)
                 self._call(f"{path}.disks[{i}]", self.model.add_disk, b.name, d.node, **kw)
             for i, j in enumerate(b.bearings):
                 self._bearing(b.name, j, f"{path}.bearings[{i}]")
@@ -225,6 +235,37 @@ class _Builder:
             self._call("model.gravity", self.model.set_gravity, spec.model.gravity)
         self._call("meshes", self.model.speed_plan)  # kinematic consistency of the gear train
         return self.model
+
+    @staticmethod
+    def _disk_density(d: Any, path: str, body: Any) -> float:
+        """A disk given by its dimensions needs its density, or a named material (its own,
+        else its shaft's)."""
+        value = material_constant(d, "density")
+        if value is None and d.material is None:
+            value = material_constant(body, "density") if getattr(body, "material", None) else None
+        if value is not None:
+            return value
+        if d.outer_diameter is not None or d.width is not None:
+            raise ModelError(
+                f"{path}.density: required for a disk given by `outer_diameter` and `width` "
+                f'(or name a material, `material = "steel"`; known: {", ".join(MATERIALS)}); '
+                "rheolin assumes no material"
+            )
+        return 0.0  # given by mass and inertia: the density is not used
+
+    @staticmethod
+    def _shaft_constants(b: Shaft, path: str) -> dict[str, float]:
+        """Elastic modulus, Poisson's ratio, density: given, or from a named material."""
+        out = {}
+        for key in ("elastic_modulus", "poisson_ratio", "density"):
+            value = material_constant(b, key)
+            if value is None:
+                raise ModelError(
+                    f'{path}.{key}: required (or name a material, `material = "steel"`; '
+                    f"known: {', '.join(MATERIALS)}); rheolin assumes no material"
+                )
+            out[key] = value
+        return out
 
     def _file(self, path: str, b: CondensedBody) -> Path:
         f = Path(b.path)
@@ -262,9 +303,7 @@ class _Builder:
                 b.positions,
                 outer_diameter=None if od is None else (od[0] if len(od) == 1 else od),
                 inner_diameter=idi[0] if len(idi) == 1 else idi,
-                elastic_modulus=b.elastic_modulus,
-                poisson_ratio=b.poisson_ratio,
-                density=b.density,
+                **self._shaft_constants(b, path),
                 material_damping=b.material_damping,
                 axis=b.axis,
                 origin=b.origin,

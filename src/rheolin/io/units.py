@@ -99,6 +99,11 @@ def _parse(text: str, kind: str, unit: str, example: str) -> float:
             raise UnitError(f"expected a speed like {example!r}, got {text!r}")
         return float(q.to("Hz").magnitude) * 2.0 * math.pi
     target = ureg.Quantity(1.0, unit) if unit else ureg.Quantity(1.0)
+    if unit and q.dimensionless and str(q.units) == "dimensionless":
+        raise UnitError(
+            f"expected a {kind.replace('_', ' ')} in {unit}, got {text!r} without a unit; "
+            f"write it like {example!r} (plain TOML numbers, not strings, are SI)"
+        )
     if q.dimensionality != target.dimensionality:
         raise UnitError(
             f"expected a {kind.replace('_', ' ')} in {unit or 'no unit'} (e.g. {example!r}), "

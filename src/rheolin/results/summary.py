@@ -59,8 +59,9 @@ def summarize(ds: xr.Dataset) -> dict[str, Any]:
     keys += ("stability_mechanism",)
     keys += ("harmonic_count", "closure_order", "max_order", "n_dof", "model_sha256")
     out: dict[str, Any] = {k: _plain(ds.attrs.get(k)) for k in keys}
-    if out.get("stability_decided") is not None:
-        out["stability_decided"] = bool(out["stability_decided"])
+    for flag in ("success", "stability_decided"):  # JSON booleans (docs/results-schema.md)
+        if out.get(flag) is not None:
+            out[flag] = bool(out[flag])
     q = complex_values(ds["displacement"])
     radial = np.hypot(np.abs(q.sel(component="ux")), np.abs(q.sel(component="uy")))
     radial = radial * xr.where(q["harmonic"] > 0, 2.0, 1.0)
