@@ -20,7 +20,13 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from ._cli_errors import EXIT_INPUT, EXIT_INTERRUPTED, plain_error, sigterm_as_interrupt
+from ._cli_errors import (
+    EXIT_FAILED,
+    EXIT_INPUT,
+    EXIT_INTERRUPTED,
+    plain_error,
+    sigterm_as_interrupt,
+)
 
 __all__ = ["StudyBar", "print_study_summary", "run_sweep"]
 
@@ -70,7 +76,8 @@ def run_sweep(
     except ModelError as exc:  # another study in the directory, a busy directory, --scheduler
         return fail(str(exc))
     print_study_summary(console, err, result)
-    return 0 if bool((result.dataset["success"] == 1).all()) else 1
+    converged = bool((result.dataset["success"] == 1).all())
+    return 0 if converged and not map_counts(result)["ranges"] else EXIT_FAILED
 
 
 @contextlib.contextmanager
@@ -146,6 +153,21 @@ class StudyBar:
         return f"{rpm:.6g} rpm" + (f", {extra}" if extra else "")
 
 
+def map_counts(result: Any) -> dict[str, int]:
+    """Over every stability map of a study: speeds, unstable and undecided speeds, speeds
+    whose truncation did not converge, unstable ranges."""
+    out = dict(speeds=0, unstable=0, undecided=0, unconverged=0, ranges=0)
+    for smap in result.maps.values():
+        n = int(np.size(smap.speeds))
+        decided = np.asarray(smap.decided, bool) if np.size(smap.decided) == n else np.ones(n, bool)
+        out["speeds"] += n
+        out["unstable"] += int((~np.asarray(smap.stable, bool)).sum())
+        out["undecided"] += int((~decided).sum())
+        out["unconverged"] += int((~np.asarray(smap.converged, bool)).sum())
+        out["ranges"] += len(smap.ranges)
+    return out
+
+
 def print_study_summary(console: Console, err: Console, result: Any) -> None:
     """Counts, unstable ranges and the files written (warnings to ``err``)."""
     ds, spec = result.dataset, result.spec
@@ -164,17 +186,35 @@ def print_study_summary(console: Console, err: Console, result: Any) -> None:
             ranges.append(
                 f"{r.lower * RPM:.1f}..{r.upper * RPM:.1f}{where} ({r.label or r.mechanism})"
             )
+    counts = map_counts(result)
+    if unchecked and counts["speeds"]:  # --stability off: the map's verdicts are the verdicts
+        verdict = (
+            f"stability (from the map): {counts['unstable']} unstable, "
+            f"{counts['undecided']} undecided of {counts['speeds']} speeds"
+        )
+    else:
+        verdict = f"stability: {unstable} unstable, {unchecked} not checked"
     console.print(
         f"{size} = {n} points ({result.resumed} from the checkpoint, {result.computed} "
         f"computed now): {n - unsuccessful} converged, {unsuccessful} not successful"
-        f"{f' ({failed} failed with an error)' if failed else ''}; stability: {unstable} "
-        f"unstable, {unchecked} not checked",
+        f"{f' ({failed} failed with an error)' if failed else ''}; {verdict}",
+        markup=False,
         highlight=False,
     )
     if result.maps:
         console.print(
             "stability map unstable ranges (rpm): " + ("; ".join(ranges) or "none"), markup=False
         )
+        if counts["unconverged"] or counts["undecided"]:
+            err.print(
+                f"warning: stability map: the Floquet truncation did not converge at "
+                f"{counts['unconverged']} and the verdict is undecided at {counts['undecided']} "
+                f"of {counts['speeds']} speeds (stability_map.nc: `converged`, `decided`; "
+                "docs/stability.md)",
+                markup=False,
+                highlight=False,
+                soft_wrap=True,
+            )
     for w in result.warnings:
         err.print(f"warning: {w}", markup=False, highlight=False, soft_wrap=True)
     if result.written:

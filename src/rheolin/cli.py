@@ -47,7 +47,7 @@ app = typer.Typer(
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     help="rheolin: periodic steady state and stability of rotating transmissions. "
-    "Exit codes: 0 success, 1 not converged, unstable or undecided, 2 invalid input, "
+    "Exit codes: 0 success, 1 not converged or unstable, 2 invalid input, "
     "3 internal error, 130 interrupted.",
 )
 console = Console(emoji=False, highlight=False)
@@ -287,6 +287,9 @@ def run(
     else:
         print_summary(console, summary, seconds)
         notes.show()
+    for note in verdict.notes:  # also with --json (stderr): undecided verdicts
+        if note not in notes.messages:
+            err.print(f"warning: {note}", markup=False, highlight=False, soft_wrap=True)
         console.print("wrote " + ", ".join(str(p) for p in written), markup=False)
     if not verdict.ok:
         raise typer.Exit(EXIT_FAILED)

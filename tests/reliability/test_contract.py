@@ -173,3 +173,28 @@ node = 0
 force = [1, 0, 0]
 order = 1
 """
+
+
+def test_condensed_body_with_an_indefinite_mass_is_refused():
+    from rheolin.errors import ModelError
+    from rheolin.mechanics.condensed import CondensedBody
+
+    K = np.eye(6) * 1e6
+    M = np.eye(6)
+    assert CondensedBody(nodes=[0], M=M, K=K).M.shape == (6, 6)
+    bad = M.copy()
+    bad[2, 2] = -1e-3  # one negative direction: negative kinetic energy
+    with pytest.raises(ModelError, match=r"`M` \(the mass matrix\) must be positive semidef"):
+        CondensedBody(nodes=[0], M=bad, K=K)
+    with pytest.raises(ModelError, match="symmetric"):
+        CondensedBody(nodes=[0], M=M + np.triu(np.ones((6, 6)), 1), K=K)
+
+
+def test_sizes_in_the_file_are_refused_before_allocating(invoke, tmp_path, no_compute):
+    g = example_text("gearbox")
+    text = g.replace("order = 3 ", "order = 1000000000 ").replace("max_order = 200 ", "", 1)
+    (tmp_path / "o.toml").write_text(text)
+    _one_line_error(invoke("validate", tmp_path / "o.toml"), "harmonics.order", "memory budget")
+    big = g.replace("stiffness_harmonics = 5", "stiffness_harmonics = 1000000000", 1)
+    (tmp_path / "s.toml").write_text(big)
+    _one_line_error(invoke("validate", tmp_path / "s.toml"), "stiffness_harmonics", "500")

@@ -33,7 +33,7 @@ def point_verdict(summary: dict[str, Any]) -> Verdict:
     'stability is UNDECIDED'
     """
     notes = []
-    if summary.get("stability_decided") is False:
+    if summary.get("stability") == "undecided" or summary.get("stability_decided") is False:
         notes.append(
             "stability is UNDECIDED: the Floquet truncation could still flip the verdict "
             "(docs/stability.md)"

@@ -15,6 +15,7 @@ import xarray as xr
 
 from ..io.atomic import atomic_write
 from .dataset import complex_values
+from .schema import SCHEMA_VERSION
 
 __all__ = ["summarize", "write_summary"]
 
@@ -53,12 +54,14 @@ def summarize(ds: xr.Dataset) -> dict[str, Any]:
         "requested_method",
         "success",
     )
-    keys += ("status", "message", "iterations", "residual", "stability", "max_floquet_real")
+    keys += ("status", "message", "iterations", "residual", "residual_kind", "relative_residual")
+    keys += ("rtol", "stability", "max_floquet_real")
     keys += ("stability_decided", "floquet_method", "floquet_lattice_order", "floquet_lattice_size")
     keys += ("leading_exponent_real", "leading_exponent_frequency_hz", "floquet_seconds")
     keys += ("stability_mechanism",)
     keys += ("harmonic_count", "closure_order", "max_order", "n_dof", "model_sha256")
-    out: dict[str, Any] = {k: _plain(ds.attrs.get(k)) for k in keys}
+    out: dict[str, Any] = {"schema": "rheolin.summary", "schema_version": SCHEMA_VERSION}
+    out.update({k: _plain(ds.attrs.get(k)) for k in keys})
     for flag in ("success", "stability_decided"):  # JSON booleans (docs/results-schema.md)
         if out.get(flag) is not None:
             out[flag] = bool(out[flag])
