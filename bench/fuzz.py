@@ -23,10 +23,10 @@ from hypothesis import HealthCheck, given, settings
 from typer.testing import CliRunner
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "tests" / "reliability"))
-from fuzz_cases import check_outcome, mutated_model, run_arguments  # noqa: E402
+from fuzz_cases import check_outcome, mutated_model, run_arguments
 
-from rheolin.cli import app  # noqa: E402
-from rheolin.data import example_text  # noqa: E402
+from rheolin.cli import app
+from rheolin.data import example_text
 
 
 def main() -> None:

@@ -70,7 +70,8 @@ class HarmonicSet:
         generators: Iterable[int] | None = None,
         max_size: int | None = None,
     ) -> HarmonicSet:
-        """Grow a set from the load harmonics by the coefficient harmonics (DESIGN.md §4).
+        """Grow a set from the load harmonics by the coefficient harmonics (docs/conventions.md,
+        harmonic sets).
 
         Start at the system's load harmonics ``S_0``; ``S_{j+1} = S_j ∪ {n ± g}`` for every
         generator ``g``; stop after ``order`` steps. Keep ``|n| <= max_harmonic``.

@@ -1,6 +1,6 @@
 """The harmonic-balance operator of a :class:`PeriodicSystem` on a :class:`HarmonicSet`.
 
-Row ``m`` of the coupled system (DESIGN.md §2, seed eq. 3)::
+Row ``m`` of the coupled system (docs/conventions.md, seed eq. 3)::
 
     sum_{n in H} A_{m-n}(n) q_n = f_m,   A_k(n) = -(n w1)^2 M_k + i n w1 D_k + K_k
 

@@ -82,6 +82,12 @@ HOSTILE_VALUES: list[Any] = [
 ]
 
 
+MUTATIONS = [
+    *["replace"] * 3,
+    *["delete", "duplicate", "unknown", "rename", "scale", "size"],
+]
+
+
 def example_document(name: str = "rotor") -> dict[str, Any]:
     """An embedded example read into a dict."""
     return tomllib.loads(example_text(name))
@@ -124,21 +130,7 @@ def mutated_model(draw: st.DrawFn, names: tuple[str, ...] = ("rotor", "gearbox")
             break
         path = draw(st.sampled_from(paths))
         parent, key = _get(doc, path[:-1]), path[-1]
-        kind = draw(
-            st.sampled_from(
-                [
-                    "replace",
-                    "replace",
-                    "replace",
-                    "delete",
-                    "duplicate",
-                    "unknown",
-                    "rename",
-                    "scale",
-                    "size",
-                ]
-            )  # fmt: skip
-        )
+        kind = draw(st.sampled_from(MUTATIONS))
         if kind == "replace":
             parent[key] = copy.deepcopy(draw(st.sampled_from(HOSTILE_VALUES)))
         elif kind == "delete":

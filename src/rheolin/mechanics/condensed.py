@@ -3,8 +3,8 @@
 The body's DOFs are node-major, 6 per node ``(u, phi)`` in body axes; ``nodes`` maps body node
 ``i`` to the global node ``nodes[i]``. ``frame`` holds the body axes in global coordinates (as
 columns) at ``t = 0``. The body spins at ``W = s * w1`` about ``axis`` (global); its nodes must
-lie on the spin axis (their reference positions do not move). Contributions (DESIGN.md
-section 5)::
+lie on the spin axis (their reference positions do not move). Contributions
+(docs/rotating-bodies.md)::
 
     M += Rt M_B Rt^T,   D += Rt D_B Rt^T + W Rt G_B Rt^T,   K += Rt K_B Rt^T + Rt D_B Rt'^T
 

@@ -54,7 +54,7 @@ def solve(
         The harmonic set: an int ``N`` (``-N..N``), an iterable of ints, or a
         :class:`~rheolin.HarmonicSet`.
     method
-        ``"auto"``, ``"lti"``, ``"perturbation"``, ``"gmres"``, ``"direct"`` (DESIGN.md §3),
+        ``"auto"``, ``"lti"``, ``"perturbation"``, ``"gmres"``, ``"direct"`` (docs/solvers.md),
         or ``"transient"`` (BDF time integration from rest until periodic: the baseline).
     rtol
         Tolerance of the iterative methods on ``||f - A q|| / ||f||``, and the acceptance
@@ -77,7 +77,7 @@ def solve(
         (:func:`rheolin.budget.memory_budget`) and says in ``message`` why when it does
         not; ``True`` always (raises :class:`~rheolin.budget.MemoryBudgetError` beyond the
         budget); ``False`` never. An unstable operating point gives ``success=False``,
-        ``status=4``: its periodic solution exists but is not physical (DESIGN.md §6). The
+        ``status=4``: its periodic solution exists but is not physical (docs/stability.md). The
         Floquet result is kept in ``Solution.floquet``.
     options
         Method-specific options (e.g. for ``"transient"``), passed through unchanged.
