@@ -41,6 +41,7 @@ def main() -> None:
     runner = CliRunner()
     tmp = Path(tempfile.mkdtemp(prefix="rheolin-fuzz-"))
     (tmp / "file").write_text("not a directory")
+    os.chdir(tmp)  # `--out ''` is the working directory
     model = tmp / "rotor.toml"
     model.write_text(example_text("rotor"))
     counts: dict[str, Counter] = {"models": Counter(), "arguments": Counter()}

@@ -290,6 +290,7 @@ def run(
     for note in verdict.notes:  # also with --json (stderr): undecided verdicts
         if note not in notes.messages:
             err.print(f"warning: {note}", markup=False, highlight=False, soft_wrap=True)
+    if not as_json:
         console.print("wrote " + ", ".join(str(p) for p in written), markup=False)
     if not verdict.ok:
         raise typer.Exit(EXIT_FAILED)

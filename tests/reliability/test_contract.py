@@ -46,7 +46,7 @@ def test_output_path_is_checked_before_computing(invoke, rotor, tmp_path, no_com
 
 
 @pytest.mark.parametrize(
-    "args, needles",
+    "case, needles",
     [
         (("run", "{m}", "--max-order", "inf"), ("--max-order", "inf")),
         (("run", "{m}", "--max-order", "nan"), ("--max-order",)),
@@ -60,10 +60,12 @@ def test_output_path_is_checked_before_computing(invoke, rotor, tmp_path, no_com
         (("sweep", "{m}", "--speeds", "6000:100:100rpm"), ("--speeds", "6000:100:100rpm")),
         (("sweep", "{m}", "--speeds", "1000rpm", "--workers", "0"), ("--workers",)),
         (("run", "{m}", "--harmonics", "100000000"), ("order", "memory budget")),
+        (("run", "{m}", "--out", "{t}/" + "d" * 300), ("--out", "300 bytes")),  # bench/fuzz.py
     ],
 )
-def test_bad_options_exit_2_naming_the_option(invoke, rotor, tmp_path, no_compute, args, needles):
-    args = [a.format(m=rotor) for a in args] + ["--out", str(tmp_path / "o")]
+def test_bad_options_exit_2_naming_the_option(invoke, rotor, tmp_path, no_compute, case, needles):
+    args = [*[a.format(m=rotor, t=tmp_path) for a in case[:2]], "--out", str(tmp_path / "o")]
+    args += [a.format(m=rotor, t=tmp_path) for a in case[2:]]  # a later --out wins
     _one_line_error(invoke(*args), *needles)
     assert not (tmp_path / "o").exists()
 
@@ -198,3 +200,9 @@ def test_sizes_in_the_file_are_refused_before_allocating(invoke, tmp_path, no_co
     big = g.replace("stiffness_harmonics = 5", "stiffness_harmonics = 1000000000", 1)
     (tmp_path / "s.toml").write_text(big)
     _one_line_error(invoke("validate", tmp_path / "s.toml"), "stiffness_harmonics", "500")
+
+
+def test_lti_on_a_time_varying_model_is_an_input_error(invoke, rotor, tmp_path):
+    """Found by bench/fuzz.py: it used to exit 3 (an internal error)."""
+    _one_line_error(invoke("run", rotor, "--method", "lti", "--out", tmp_path / "o"), "lti")
+    assert not (tmp_path / "o").exists()

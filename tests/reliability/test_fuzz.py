@@ -25,7 +25,8 @@ FUZZ = settings(
 
 
 @pytest.fixture(autouse=True)
-def _small_budget(monkeypatch):
+def _small_budget(monkeypatch, tmp_path):
+    monkeypatch.chdir(tmp_path)  # `--out ''` is the working directory
     monkeypatch.setenv("RHEOLIN_SOLVE_MEMORY", "256 MB")
     monkeypatch.setenv("RHEOLIN_MEMORY_BUDGET", "256 MB")
 

@@ -31,6 +31,9 @@ from ..errors import ModelError
 __all__ = ["check_output_dir", "staged_output"]
 
 _STAGE = ".{name}.partial-{pid}"
+#: Longest output directory name [bytes]: 255 (the usual file-system limit) minus the staging
+#: directory's prefix and suffix.
+MAX_NAME = 255 - 40
 
 
 def check_output_dir(path: str | Path, option: str = "--out") -> Path:
@@ -50,6 +53,13 @@ def check_output_dir(path: str | Path, option: str = "--out") -> Path:
         raise ModelError(f"{option}: empty path; give a directory, e.g. {option} results")
     if "\x00" in str(path):
         raise ModelError(f"{option}: the path {str(path)!r} contains a NUL character")
+    for part in p.absolute().parts:
+        if len(os.fsencode(part)) > MAX_NAME:
+            raise ModelError(
+                f"{option}: the path component {part[:40]!r}... has {len(os.fsencode(part))} "
+                f"bytes; at most {MAX_NAME} are allowed (file systems allow 255, and rheolin "
+                "stages the output beside it under a longer name)"
+            )
     if p.exists() and not p.is_dir():
         raise ModelError(f"{option}: {str(p)!r} is an existing file; give a directory (created)")
     probe = p

@@ -176,8 +176,8 @@ class Section(_Strict):
     Iy: SecondMomentPos
     Iz: SecondMomentPos
     torsion_constant: SecondMomentPos
-    kappa_y: float = Field(default=float("inf"), gt=0)
-    kappa_z: float = Field(default=float("inf"), gt=0)
+    kappa_y: float = Field(default=float("inf"), ge=1e-3)  # shear coefficient (inf: no shear)
+    kappa_z: float = Field(default=float("inf"), ge=1e-3)
 
 
 class Disk(_Strict):
