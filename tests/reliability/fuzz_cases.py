@@ -114,7 +114,8 @@ def _get(doc: Any, path: tuple) -> Any:
 def _names(doc: dict[str, Any]) -> list[str]:
     names = []
     for table in ("shafts", "rigid_bodies", "condensed_bodies", "meshes", "forces"):
-        for item in doc.get(table, []):
+        items = doc.get(table, [])
+        for item in items if isinstance(items, list) else []:
             if isinstance(item, dict) and isinstance(item.get("name"), str):
                 names.append(item["name"])
     return names
