@@ -200,6 +200,7 @@ def print_study_summary(console: Console, err: Console, result: Any) -> None:
         f"{f' ({failed} failed with an error)' if failed else ''}; {verdict}",
         markup=False,
         highlight=False,
+        soft_wrap=True,
     )
     if result.maps:
         console.print(
