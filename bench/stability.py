@@ -146,7 +146,6 @@ def _map(count: int) -> dict:
         "seconds": seconds,
         "per_speed": per,
         "peak_mb": status_kb("VmHWM") / 1024,
-        "above_mb": status_kb("VmHWM") / 1024 - base_mb,
         "decided": int(np.sum(smap.decided)),
         "stable": int(np.sum(smap.stable)),
         "max_real": float(np.max(smap.max_real)),

@@ -11,7 +11,8 @@
     ROSS ``run_unbalance_response`` against rheolin's batched ``lti_speeds`` and against a
     Python loop of ``template.assemble`` + ``rl.solve`` (the general API). ROSS applies the
     unbalance as a force ``U W^2`` (rheolin's disk unbalance is the exact linearization with a
-    rotating centre of mass, DESIGN.md §5, which differs at O(c^2)), so rheolin gets the same
+    rotating centre of mass, docs/rotating-bodies.md, which differs at O(c^2)), so rheolin gets
+    the same
     force here. Responses must agree to 1e-9.
 (c) Resident memory over 500 ``rl.solve`` calls (a 1000-DOF chain with a gear mesh, 51
     harmonics, gmres) with the default workers, before and after.

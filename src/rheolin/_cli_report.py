@@ -70,7 +70,9 @@ def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
     return np.array([parse_speed(f"{v} {unit}".strip(), option) for v in values])
 
 
-def _um(x: float) -> str:
+def _um(x: float | None) -> str:
+    if x is None or not math.isfinite(x):
+        return "n/a"
     return f"{x * 1e6:.3g} µm"
 
 
@@ -93,21 +95,35 @@ def _stability_detail(s: dict[str, Any]) -> str:
     return f" ({how}; {lead}){escape(mech)}"
 
 
+def _num(x: Any, fmt: str, missing: str = "n/a") -> str:
+    """``format(x, fmt)``, or ``missing`` for a value that was not computed (None, NaN)."""
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return missing
+    return format(x, fmt)
+
+
 def print_summary(console: Console, s: dict[str, Any], seconds: float) -> None:
-    """Readable summary of one operating point (the dict of ``rheolin.results.summarize``)."""
+    """Readable summary of one operating point (the dict of ``rheolin.results.summarize``).
+
+    Every user-given name is escaped (a body called ``[red]`` prints as written)."""
     ok = "[green]converged[/green]" if s["success"] else "[red]NOT successful[/red]"
     console.print(
-        f"[bold]Operating point[/bold] {s['speed_rpm']:.1f} rpm "
-        f"({s['speed']:.4g} rad/s), base frequency w1 = {s['base_frequency']:.4g} rad/s"
+        f"[bold]Operating point[/bold] {_num(s['speed_rpm'], '.1f')} rpm "
+        f"({_num(s['speed'], '.4g')} rad/s), base frequency w1 = "
+        f"{_num(s['base_frequency'], '.4g')} rad/s"
     )
+    res = s.get("residual")
+    residual = f"backward error {_num(res, '.2e')}" if res is not None else "no residual"
+    if s.get("relative_residual") is not None:
+        residual += f" (||f - A q|| / ||f|| = {_num(s['relative_residual'], '.2e')})"
     console.print(
-        f"method {s['method']} (asked: {s['requested_method']}), {s['iterations']} iterations, "
-        f"residual {s['residual']:.2e}: {ok}; {s['harmonic_count']} harmonics x "
+        f"method {escape(str(s['method']))} (asked: {escape(str(s['requested_method']))}), "
+        f"{s['iterations']} iterations, {residual}: {ok}; {s['harmonic_count']} harmonics x "
         f"{s['n_dof']} DOF, solved in {seconds:.2f} s"
     )
     stab = s["stability"]
     colour = {"stable": "green", "unstable": "red"}.get(stab, "yellow")
-    console.print(f"stability: [{colour}]{stab}[/{colour}]{_stability_detail(s)}")
+    console.print(f"stability: [{colour}]{escape(str(stab))}[/{colour}]{_stability_detail(s)}")
     console.print(f"[dim]{escape(str(s['message']))}[/dim]")
     t = Table(title="Largest responses per body (radial, single-sided amplitude)")
     for col in ("body", "node", "static", "dynamic (sum)", "largest harmonics"):
@@ -118,19 +134,26 @@ def print_summary(console: Console, s: dict[str, Any], seconds: float) -> None:
             for h in b["largest_harmonics"][:2]
         )
         t.add_row(
-            body, b["node"], _um(b["static_radial_m"]), _um(b["radial_amplitude_bound_m"]), tops
+            escape(body),
+            escape(b["node"]),
+            _um(b["static_radial_m"]),
+            _um(b["radial_amplitude_bound_m"]),
+            tops,
         )
     console.print(t)
-    if "bearings" in s:
+    if s.get("bearings"):
         t = Table(title="Bearing forces (radial)")
         for col in ("bearing", "static (N)", "dynamic sum (N)", "largest harmonic"):
             t.add_column(col)
         for name, b in s["bearings"].items():
             h = b["largest_harmonics"][:1]
             top = f"{h[0]['amplitude']:.3g} N @ {h[0]['frequency_hz']:.1f} Hz" if h else "-"
-            t.add_row(name, f"{b['static_radial_N']:.3g}", f"{b['dynamic_radial_sum_N']:.3g}", top)
+            t.add_row(
+                escape(name), _num(b["static_radial_N"], ".3g"),
+                _num(b["dynamic_radial_sum_N"], ".3g"), top,
+            )  # fmt: skip
         console.print(t)
-    if "meshes" in s:
+    if s.get("meshes"):
         t = Table(title="Mesh dynamic transmission error (line of action)")
         for col in ("mesh", "mean", "largest harmonics"):
             t.add_column(col)
@@ -139,5 +162,5 @@ def print_summary(console: Console, s: dict[str, Any], seconds: float) -> None:
                 f"{_um(h['amplitude'])} @ {h['frequency_hz']:.1f} Hz"
                 for h in m["largest_harmonics"][:2]
             )
-            t.add_row(name, _um(m["mean_m"]), tops)
+            t.add_row(escape(name), _um(m["mean_m"]), tops)
         console.print(t)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import signal
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
@@ -19,6 +18,14 @@ from rich.progress import (
     TextColumn,
     TimeElapsedColumn,
     TimeRemainingColumn,
+)
+
+from ._cli_errors import (
+    EXIT_FAILED,
+    EXIT_INPUT,
+    EXIT_INTERRUPTED,
+    plain_error,
+    sigterm_as_interrupt,
 )
 
 __all__ = ["StudyBar", "print_study_summary", "run_sweep"]
@@ -45,8 +52,8 @@ def run_sweep(
     from .study.files import write_results
 
     def fail(message: str) -> int:
-        err.print(f"[red]error:[/red] {escape(message)}", highlight=False, soft_wrap=True)
-        return 2
+        plain_error(message)
+        return EXIT_INPUT
 
     try:
         spec = StudySpec.create(model, speeds, list(vary), Settings(**settings))
@@ -56,7 +63,7 @@ def run_sweep(
         return fail(str(exc))
     write = functools.partial(write_results, plots=plots, quantity=quantity)
     try:
-        with _client(scheduler) as client, _sigterm_as_interrupt(), StudyBar(err, spec) as bar:
+        with _client(scheduler) as client, sigterm_as_interrupt(), StudyBar(err, spec) as bar:
             result = run_study(spec, client=client, progress=bar, write=write, **run)
     except StudyInterrupted as exc:
         err.print(
@@ -65,11 +72,12 @@ def run_sweep(
             highlight=False,
             soft_wrap=True,
         )
-        return 130
+        return EXIT_INTERRUPTED
     except ModelError as exc:  # another study in the directory, a busy directory, --scheduler
         return fail(str(exc))
     print_study_summary(console, err, result)
-    return 0 if bool((result.dataset["success"] == 1).all()) else 1
+    converged = bool((result.dataset["success"] == 1).all())
+    return 0 if converged and not map_counts(result)["ranges"] else EXIT_FAILED
 
 
 @contextlib.contextmanager
@@ -90,20 +98,6 @@ def _client(address: str | None) -> Iterator[Any]:
         yield client
     finally:
         client.close()
-
-
-@contextlib.contextmanager
-def _sigterm_as_interrupt() -> Iterator[None]:
-    """SIGTERM (a batch system's stop) ends the study like Ctrl-C: finished chunks kept."""
-
-    def interrupt(signum: int, frame: Any) -> None:
-        raise KeyboardInterrupt
-
-    old = signal.signal(signal.SIGTERM, interrupt)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, old)
 
 
 class StudyBar:
@@ -159,6 +153,21 @@ class StudyBar:
         return f"{rpm:.6g} rpm" + (f", {extra}" if extra else "")
 
 
+def map_counts(result: Any) -> dict[str, int]:
+    """Over every stability map of a study: speeds, unstable and undecided speeds, speeds
+    whose truncation did not converge, unstable ranges."""
+    out = dict(speeds=0, unstable=0, undecided=0, unconverged=0, ranges=0)
+    for smap in result.maps.values():
+        n = int(np.size(smap.speeds))
+        decided = np.asarray(smap.decided, bool) if np.size(smap.decided) == n else np.ones(n, bool)
+        out["speeds"] += n
+        out["unstable"] += int((~np.asarray(smap.stable, bool)).sum())
+        out["undecided"] += int((~decided).sum())
+        out["unconverged"] += int((~np.asarray(smap.converged, bool)).sum())
+        out["ranges"] += len(smap.ranges)
+    return out
+
+
 def print_study_summary(console: Console, err: Console, result: Any) -> None:
     """Counts, unstable ranges and the files written (warnings to ``err``)."""
     ds, spec = result.dataset, result.spec
@@ -177,16 +186,37 @@ def print_study_summary(console: Console, err: Console, result: Any) -> None:
             ranges.append(
                 f"{r.lower * RPM:.1f}..{r.upper * RPM:.1f}{where} ({r.label or r.mechanism})"
             )
+    counts = map_counts(result)
+    if unchecked and counts["speeds"]:  # --stability off: the map's verdicts are the verdicts
+        verdict = (
+            f"stability (from the map): {counts['unstable']} unstable, "
+            f"{counts['undecided']} undecided of {counts['speeds']} speeds"
+        )
+    else:
+        verdict = f"stability: {unstable} unstable, {unchecked} not checked"
     console.print(
         f"{size} = {n} points ({result.resumed} from the checkpoint, {result.computed} "
         f"computed now): {n - unsuccessful} converged, {unsuccessful} not successful"
-        f"{f' ({failed} failed with an error)' if failed else ''}; stability: {unstable} "
-        f"unstable, {unchecked} not checked",
+        f"{f' ({failed} failed with an error)' if failed else ''}; {verdict}",
+        markup=False,
         highlight=False,
+        soft_wrap=True,
     )
     if result.maps:
-        console.print("stability map unstable ranges (rpm): " + ("; ".join(ranges) or "none"))
+        console.print(
+            "stability map unstable ranges (rpm): " + ("; ".join(ranges) or "none"), markup=False
+        )
+        if counts["unconverged"] or counts["undecided"]:
+            err.print(
+                f"warning: stability map: the Floquet truncation did not converge at "
+                f"{counts['unconverged']} and the verdict is undecided at {counts['undecided']} "
+                f"of {counts['speeds']} speeds (stability_map.nc: `converged`, `decided`; "
+                "docs/stability.md)",
+                markup=False,
+                highlight=False,
+                soft_wrap=True,
+            )
     for w in result.warnings:
-        err.print(f"[yellow]warning:[/yellow] {escape(w)}", highlight=False)
+        err.print(f"warning: {w}", markup=False, highlight=False, soft_wrap=True)
     if result.written:
         console.print("wrote " + ", ".join(str(p) for p in result.written), highlight=False)

@@ -1,11 +1,15 @@
 """Command line ``rheolin``: the terminal belongs to this module only.
 
-Exit codes (every command):
+Exit codes (every command; :mod:`rheolin._cli_errors` holds the contract):
 
 * 0 -- success;
 * 1 -- the computation ran but did not succeed (not converged, or the operating point is
   unstable); results are still written and say so;
-* 2 -- invalid input: model file, options, or a command whose optional part is missing.
+* 2 -- invalid input: model file, options, output path, a problem too large for the memory
+  budget, or a command whose optional part is missing; one plain line per problem naming the
+  field, what was given and what is allowed; checked before any computation;
+* 3 -- internal error (a bug): one short line; ``rheolin --debug ...`` shows the traceback;
+* 130 -- interrupted (Ctrl-C, SIGTERM): says what was kept.
 """
 
 from __future__ import annotations
@@ -25,19 +29,41 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
 from . import __version__
+from ._cli_errors import (
+    EXIT_FAILED,
+    ContractGroup,
+    UserError,
+    err,
+    set_debug,
+    set_kept,
+    sigterm_as_interrupt,
+)
 from ._cli_report import parse_speed, parse_speeds, print_summary
 from ._cli_ross import register as _register_ross
-from .errors import ModelError
 from .harmonics import TruncationWarning
 
 app = typer.Typer(
+    cls=ContractGroup,
     add_completion=False,
     no_args_is_help=True,
+    pretty_exceptions_enable=False,
     help="rheolin: periodic steady state and stability of rotating transmissions. "
-    "Exit codes: 0 success, 1 not converged or unstable, 2 invalid input.",
+    "Exit codes: 0 success, 1 not converged or unstable, 2 invalid input, "
+    "3 internal error, 130 interrupted.",
 )
-console = Console()
-err = Console(stderr=True)
+console = Console(emoji=False, highlight=False)
+
+#: Files ``run`` and ``campbell`` write into their output directory (an earlier run's are
+#: replaced as a set).
+RUN_FILES = {
+    "results.nc",
+    "summary.json",
+    "orbits.png",
+    "spectrum.png",
+    "convergence.png",
+    "bearing_forces.png",
+}
+CAMPBELL_FILES = {"campbell.nc", "campbell.png", "stability_map.nc"}
 
 MODEL = typer.Argument(..., help="Model file (TOML, see docs/model-format.md).")
 OUT = typer.Option(None, "--out", "-o", help="Output directory (created).")
@@ -55,9 +81,9 @@ STABILITY = typer.Option(
 )
 
 
-def _fail(message: str) -> typer.Exit:
-    err.print(f"[red]error:[/red] {message}", highlight=False, markup=True, soft_wrap=True)
-    return typer.Exit(2)
+def _fail(message: str) -> UserError:
+    """An invalid option: raised, the contract prints it plainly and exits 2."""
+    return UserError(message)
 
 
 class _Notes:
@@ -84,40 +110,65 @@ class _Notes:
 
     def show(self) -> None:
         for m in self.messages:
-            err.print(f"[yellow]warning:[/yellow] {escape(m)}", highlight=False)
+            err.print(f"warning: {m}", markup=False, highlight=False, soft_wrap=True)
 
 
 def _load(path: Path) -> Any:
     from .io import read_model
 
-    try:
-        return read_model(path)
-    except ModelError as exc:
-        raise _fail(str(exc)) from None
+    return read_model(path)
 
 
 def _options(
-    lm: Any, method: str, harmonics: int | None, max_order: float | None, stability: str
+    lm: Any,
+    method: str,
+    harmonics: int | None,
+    max_order: float | None,
+    stability: str,
+    rtol: float = 1e-10,
 ) -> dict[str, Any]:
     from .solvers import METHODS
 
     allowed = ["auto", *sorted(METHODS)]
     if method not in allowed:
-        raise _fail(f"--method must be one of {allowed}, got {method!r}")
+        raise _fail(f"--method: must be one of {allowed}, got {method!r}")
     if harmonics is not None and harmonics < 0:
-        raise _fail(f"--harmonics must be >= 0, got {harmonics}")
-    if max_order is not None and not max_order > 0:
-        raise _fail(f"--max-order must be > 0, got {max_order}")
-    flags = {"auto": None, "on": True, "off": False}
-    if stability.lower() not in flags:
-        raise _fail(f"--stability must be auto, on or off, got {stability!r}")
+        raise _fail(f"--harmonics: must be >= 0, got {harmonics}")
+    if max_order is not None and not (np.isfinite(max_order) and max_order > 0):
+        raise _fail(f"--max-order: must be a finite number > 0, got {max_order}")
+    if not (np.isfinite(rtol) and 0.0 < rtol < 0.1):
+        raise _fail(f"--rtol: must be a number in (0, 0.1), got {rtol}")
     h = lm.spec.harmonics
     return dict(
         method=method,
         order=h.order if harmonics is None else harmonics,
         max_order=h.max_order if max_order is None else max_order,
-        stability=flags[stability.lower()],
+        stability=_stability_flag(stability),
+        rtol=float(rtol),
     )
+
+
+def _stability_flag(stability: str) -> bool | None:
+    flags = {"auto": None, "on": True, "off": False}
+    if stability.lower() not in flags:
+        raise _fail(f"--stability: must be auto, on or off, got {stability!r}")
+    return flags[stability.lower()]
+
+
+def _out_dir(out: Path | None, default: str) -> Path:
+    """The output directory, refused before any computation when it cannot be written."""
+    from .io.outdir import check_output_dir
+
+    return check_output_dir(Path(out) if out is not None else Path(default), "--out")
+
+
+def _preflight(
+    lm: Any, speeds: Any, order: int | None, max_order: float | None, needs_load: bool = True
+) -> Any:
+    """Physical admissibility and sizes against the memory budget, before any work."""
+    from .io.preflight import preflight
+
+    return preflight(lm, speeds, order=order, max_order=max_order, needs_load=needs_load)
 
 
 VARY = typer.Option(
@@ -129,9 +180,22 @@ VARY = typer.Option(
 DEMO_OUT = typer.Option(Path("demo_results"), help="Output directory.")
 
 
+RTOL = typer.Option(
+    1e-10,
+    "--rtol",
+    help="Convergence criterion: backward error ||f - A q|| / (||A|| ||q|| + ||f||) "
+    "(docs/solvers.md), in (0, 0.1).",
+)
+
+
 @app.callback()
-def _root() -> None:
+def _root(
+    debug: bool = typer.Option(
+        False, "--debug", help="Show the traceback of an internal error (exit code 3)."
+    ),
+) -> None:
     """rheolin: periodic steady state and stability of rotating transmissions."""
+    set_debug(debug)
 
 
 @app.command()
@@ -145,10 +209,12 @@ def validate(model: Path = MODEL) -> None:
     """Check a model file; exit 0 if valid, 2 with the field paths of every problem if not."""
     lm = _load(model)
     m = lm.model
+    info = _preflight(lm, None, None, None, needs_load=False)
     console.print(
         f"{model}: valid: {len(m.bodies)} bodies, {len(m.joints)} bearings/couplings, "
         f"{len(m.meshes)} gear meshes, {len(m.forces)} forces; w1 = "
-        f"{m.speed_plan().base} x input speed"
+        f"{m.speed_plan().base} x input speed; {info.describe()}",
+        markup=False,
     )
 
 
@@ -172,51 +238,63 @@ def run(
     harmonics: int = HARMONICS,
     max_order: float = MAX_ORDER,
     stability: str = STABILITY,
+    rtol: float = RTOL,
     nodes: str = typer.Option(None, help="Orbit/spectrum nodes, e.g. input:3,output:6."),
     plots: bool = typer.Option(True, help="Write PNG plots."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
 ) -> None:
     """Solve one operating point; write DIR/results.nc, DIR/summary.json and plots."""
+    from .io.outdir import staged_output
     from .results import point_dataset, solve_point, summarize, write_dataset, write_summary
+    from .results.schema import point_verdict
 
     lm = _load(model)
-    opts = _options(lm, method, harmonics, max_order, stability)
-    try:
-        w = parse_speed(speed) if speed is not None else lm.spec.model.speed
-    except ModelError as exc:
-        raise _fail(str(exc)) from None
+    opts = _options(lm, method, harmonics, max_order, stability, rtol)
+    w = parse_speed(speed) if speed is not None else lm.spec.model.speed
     if w is None:
-        raise _fail("give --speed (the model file has no model.speed)")
-    out_dir = Path(out) if out is not None else Path(f"{model.stem}_results")
-    t0 = time.perf_counter()
-    with _Notes() as notes:
-        point = solve_point(lm.model, w, **opts)
-    seconds = time.perf_counter() - t0  # assembly, solve and stability check
-    ds = point_dataset(point, model_sha256=lm.sha256, model_name=lm.spec.model.name)
+        raise _fail("--speed: required (the model file has no model.speed); e.g. --speed 3000rpm")
     node_list = None
     if nodes:
         node_list = [x.strip() for x in nodes.split(",") if x.strip()]
-        bad = [x for x in node_list if x not in ds["node"].values]
+        bodies = lm.model.bodies.items()
+        known = {f"{b}:{i}" for b, body in bodies for i in range(len(body.positions))}
+        bad = [x for x in node_list if x not in known]
         if bad:
-            raise _fail(f"--nodes: unknown {bad}; nodes look like {ds['node'].values[0]!r}")
-    write_dataset(ds, out_dir / "results.nc")
+            raise _fail(f"--nodes: unknown {bad}; nodes look like {sorted(known)[0]!r}")
+    out_dir = _out_dir(out, f"{model.stem}_results")
+    _preflight(lm, [w], opts["order"], opts["max_order"])
+    set_kept(f"nothing written; {out_dir} is unchanged")
+    t0 = time.perf_counter()
+    with _Notes() as notes, sigterm_as_interrupt():
+        point = solve_point(lm.model, w, **opts)
+    seconds = time.perf_counter() - t0  # assembly, solve and stability check
+    ds = point_dataset(point, model_sha256=lm.sha256, model_name=lm.spec.model.name)
     summary = summarize(ds)
     summary["model_file"] = str(model)
     summary["warnings"] = notes.messages
-    write_summary(summary, out_dir / "summary.json")
-    written = [out_dir / "results.nc", out_dir / "summary.json"]
-    if plots:
-        from .plots import point_plots
+    verdict = point_verdict(summary)
+    with sigterm_as_interrupt(), staged_output(out_dir, RUN_FILES) as stage:
+        write_dataset(ds, stage / "results.nc")
+        write_summary(summary, stage / "summary.json")
+        written = [stage / "results.nc", stage / "summary.json"]
+        if plots:
+            from .plots import point_plots
 
-        written += point_plots(ds, out_dir, node_list)
+            written += point_plots(ds, stage, node_list)
+    written = [out_dir / p.name for p in written]
+    set_kept(None)
     if as_json:
         sys.stdout.write(json.dumps(summary, indent=2) + "\n")
     else:
         print_summary(console, summary, seconds)
         notes.show()
-        console.print("wrote " + ", ".join(str(p) for p in written))
-    if not point.solution.success:
-        raise typer.Exit(1)
+    for note in verdict.notes:  # also with --json (stderr): undecided verdicts
+        if note not in notes.messages:
+            err.print(f"warning: {note}", markup=False, highlight=False, soft_wrap=True)
+    if not as_json:
+        console.print("wrote " + ", ".join(str(p) for p in written), markup=False)
+    if not verdict.ok:
+        raise typer.Exit(EXIT_FAILED)
 
 
 @app.command()
@@ -228,6 +306,7 @@ def sweep(
     harmonics: int = HARMONICS,
     max_order: float = MAX_ORDER,
     stability: str = STABILITY,
+    rtol: float = RTOL,
     stability_map: bool = typer.Option(
         True, help="Also compute the Floquet stability map (stability_map.nc/.png, ranges refined)."
     ),
@@ -255,24 +334,22 @@ def sweep(
     from .plots.study import QUANTITIES
 
     lm = _load(model)
-    opts = _options(lm, method, harmonics, max_order, stability)
-    try:
-        w = parse_speeds(speeds)
-    except ModelError as exc:
-        raise _fail(str(exc)) from None
+    opts = _options(lm, method, harmonics, max_order, stability, rtol)
+    w = parse_speeds(speeds)
     if workers is not None and workers < 1:
-        raise _fail(f"--workers must be >= 1, got {workers}")
+        raise _fail(f"--workers: must be >= 1, got {workers}")
     if chunk_size is not None and chunk_size < 1:
-        raise _fail(f"--chunk-size must be >= 1, got {chunk_size}")
+        raise _fail(f"--chunk-size: must be >= 1, got {chunk_size}")
     if quantity not in QUANTITIES:
-        raise _fail(f"--quantity must be one of {sorted(QUANTITIES)}, got {quantity!r}")
+        raise _fail(f"--quantity: must be one of {sorted(QUANTITIES)}, got {quantity!r}")
+    out_dir = _out_dir(out, f"{model.stem}_sweep")
+    _preflight(lm, w, opts["order"], opts["max_order"])
     settings = {
         **opts,
         "order": harmonics,  # None: the file's [harmonics] at every grid point
         "max_order": max_order,
         "stability_map": stability_map,
     }
-    out_dir = Path(out) if out is not None else Path(f"{model.stem}_sweep")
     run = dict(out=out_dir, overwrite=overwrite, workers=workers, chunk_size=chunk_size)
     code = run_sweep(console, err, model, w, vary, settings, scheduler, run, plots, quantity)
     raise typer.Exit(code)
@@ -289,56 +366,69 @@ def campbell(
     """Campbell diagram: DIR/campbell.nc and DIR/campbell.png, critical speeds printed;
     with the Floquet stability of the full time-periodic system at every speed (as run and
     sweep: auto checks whenever it fits the memory budget)."""
+    from .io.outdir import staged_output
     from .stability import campbell as campbell_fn
 
     lm = _load(model)
-    try:
-        w = parse_speeds(speeds)
-    except ModelError as exc:
-        raise _fail(str(exc)) from None
-    flags = {"auto": None, "on": True, "off": False}
-    if stability.lower() not in flags:
-        raise _fail(f"--stability must be auto, on or off, got {stability!r}")
+    w = parse_speeds(speeds)
+    flag = _stability_flag(stability)
+    if fmax is not None and not (np.isfinite(fmax) and fmax > 0):
+        raise _fail(f"--fmax: must be a frequency > 0 in Hz, got {fmax}")
+    out_dir = _out_dir(out, f"{model.stem}_campbell")
+    _preflight(lm, w, None, None, needs_load=False)
     from .plots.campbell import plot_campbell
     from .results.dataset import write_dataset
 
-    out_dir = Path(out) if out is not None else Path(f"{model.stem}_campbell")
-    with err.status("Campbell diagram"):
-        result = campbell_fn(lm.model, w)
-    smap, why = _campbell_stability(lm.model, w, flags[stability.lower()])
-    write_dataset(result.to_dataset(), out_dir / "campbell.nc")
+    set_kept(f"nothing written; {out_dir} is unchanged")
+    with sigterm_as_interrupt():
+        with err.status("Campbell diagram"):
+            result = campbell_fn(lm.model, w)
+        smap, why = _campbell_stability(lm.model, w, flag)
+    with sigterm_as_interrupt(), staged_output(out_dir, CAMPBELL_FILES) as stage:
+        write_dataset(result.to_dataset(), stage / "campbell.nc")
+        if smap is not None:
+            write_dataset(smap.to_dataset(), stage / "stability_map.nc")
+        plot_campbell(result, stage / "campbell.png", fmax, stability=smap)
+    set_kept(None)
     written = [out_dir / "campbell.nc", out_dir / "campbell.png"]
     if smap is not None:
-        write_dataset(smap.to_dataset(), out_dir / "stability_map.nc")
         written.append(out_dir / "stability_map.nc")
-    plot_campbell(result, out_dir / "campbell.png", fmax, stability=smap)
-    table = Table(title=f"critical speeds of {model.name} (order-line crossings)")
+    table = Table(title=f"critical speeds of {escape(model.name)} (order-line crossings)")
     for col in ("order", "mode", "whirl", "speed (rpm)", "frequency (Hz)"):
         table.add_column(col, justify="right" if "(" in col or col == "mode" else "left")
     for c in result.critical_speeds:
         table.add_row(
-            c.order,
+            escape(c.order),
             str(c.mode),
             c.whirl,
             f"{c.speed * 30 / np.pi:.1f}",
             f"{c.frequency / (2 * np.pi):.2f}",
         )
     console.print(table if result.critical_speeds else "no order-line crossing in the speed range")
+    code = 0
     if smap is None:
-        console.print(f"[yellow]stability: not checked[/yellow] ({why})")
+        console.print(f"[yellow]stability: not checked[/yellow] ({escape(why)})")
     elif not smap.ranges:
         undecided = int((~np.asarray(smap.decided, bool)).sum())
-        note = f" ({undecided} speeds undecided)" if undecided else ""
-        console.print(
-            f"stability (Floquet, full periodic system): [green]stable at every speed[/green]{note}"
-        )
+        if undecided:
+            console.print(
+                "stability (Floquet, full periodic system): [yellow]no unstable speed found, "
+                f"but {undecided} of {len(smap.speeds)} speeds are UNDECIDED[/yellow] (the "
+                "truncation could still flip their verdict; docs/stability.md)"
+            )
+        else:
+            console.print(
+                "stability (Floquet, full periodic system): [green]stable at every speed[/green]"
+            )
     else:
+        code = EXIT_FAILED
         for r in smap.ranges:
             console.print(
                 f"[red]unstable[/red] {r.lower * 30 / np.pi:.1f}..{r.upper * 30 / np.pi:.1f} rpm: "
                 f"{escape(r.label)}"
             )
-    console.print("wrote " + ", ".join(str(p) for p in written))
+    console.print("wrote " + ", ".join(str(p) for p in written), markup=False)
+    raise typer.Exit(code)
 
 
 def _campbell_stability(model: Any, speeds: np.ndarray, flag: bool | None) -> tuple[Any, str]:
@@ -398,11 +488,8 @@ _register_ross(app)
 
 
 def _invoke(args: list[str]) -> int:
-    try:
-        app(args, standalone_mode=False)
-    except typer.Exit as exc:
-        return int(exc.exit_code)
-    return 0
+    code = app(args, standalone_mode=False)
+    return int(code) if isinstance(code, int) else 0
 
 
 def main() -> None:

@@ -68,8 +68,10 @@ class HarmonicSet:
         order: int = 2,
         max_harmonic: int | None = None,
         generators: Iterable[int] | None = None,
+        max_size: int | None = None,
     ) -> HarmonicSet:
-        """Grow a set from the load harmonics by the coefficient harmonics (DESIGN.md §4).
+        """Grow a set from the load harmonics by the coefficient harmonics (docs/conventions.md,
+        harmonic sets).
 
         Start at the system's load harmonics ``S_0``; ``S_{j+1} = S_j ∪ {n ± g}`` for every
         generator ``g``; stop after ``order`` steps. Keep ``|n| <= max_harmonic``.
@@ -85,6 +87,9 @@ class HarmonicSet:
             Frequency cut-off as a harmonic index (None: no cut-off).
         generators
             Harmonic steps; default: the system's nonzero coefficient harmonics.
+        max_size
+            Refuse (:class:`~rheolin.budget.MemoryBudgetError`) as soon as the set would hold
+            more indices than this, before it is grown further (None: no limit).
 
         Examples
         --------
@@ -118,6 +123,13 @@ class HarmonicSet:
                     for m in (n + g, n - g):
                         if (cap is None or abs(m) <= cap) and m not in current:
                             new.add(m)
+                if max_size is not None and 2 * (len(current) + len(new)) > max_size:
+                    from .budget import MemoryBudgetError
+
+                    raise MemoryBudgetError(
+                        f"the harmonic set grows beyond max_size={max_size} indices "
+                        f"(order {order}, {len(gens)} generators)"
+                    )
             if not new:
                 break
             current |= new

@@ -1,6 +1,6 @@
 """The periodic system ``M(t) q'' + D(t) q' + K(t) q = f(t)`` as Fourier coefficients.
 
-This is the one interface between mechanics and solvers (DESIGN.md section 2): every
+This is the one interface between mechanics and solvers (docs/conventions.md): every
 coefficient is a Fourier series ``X(t) = sum_k X_k exp(i k w1 t)`` of a real signal, so
 ``X_{-k} = conj(X_k)``.
 """

@@ -306,8 +306,10 @@ def test_sweep_stability_map_finds_the_asymmetric_band(tmp_path):
         "--stability",
         "off",
     )
-    # the forced response exists at every speed, but the sweep still reports the band
-    assert res.returncode == 0, res.stderr
+    # the forced response exists at every speed, but the map finds the band: an unstable
+    # range is a failure of the sweep (exit 1), never "0 unstable" (issue 18)
+    assert res.returncode == 1, res.stderr
+    assert "stability (from the map): 2 unstable" in res.stdout
     table = json.loads((tmp_path / "s" / "sweep.json").read_text())
     (band,) = table["unstable_ranges"]
     # bounds refined by Brent's method to the sweep's stated precision

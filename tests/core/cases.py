@@ -3,10 +3,10 @@
 Each :class:`Case` carries a system factory, the harmonic set, a reference for the harmonic
 coefficients that does not use rheolin's operator (a closed form, ``numpy.linalg.solve`` of a
 per-frequency system, or a dense harmonic-balance matrix assembled here from the formula of
-DESIGN.md §2), and the outcome expected from each method. ``test_solvers.py`` runs every case
+docs/conventions.md), and the outcome expected from each method. ``test_solvers.py`` runs every case
 against every method, the way SciPy tests its iterative solvers on one shared case list.
 
-Conventions (DESIGN.md §2): ``X(t) = sum_k X_k exp(i k w1 t)``, so ``F cos(w t)`` has
+Conventions (docs/conventions.md): ``X(t) = sum_k X_k exp(i k w1 t)``, so ``F cos(w t)`` has
 ``f_{+1} = f_{-1} = F / 2``.
 """
 
@@ -60,9 +60,9 @@ class Case:
 # --------------------------------------------------------------------------- Jeffcott rotor
 @dataclass(frozen=True)
 class Jeffcott:
-    """Asymmetric Jeffcott rotor (DESIGN.md §7): mass ``m``, rotating-frame stiffnesses
-    ``k_x``, ``k_y``, stationary damping ``c``, unbalance ``e`` at angle ``beta``, speed ``W``,
-    optional gravity ``g`` along ``-y``.
+    """Asymmetric Jeffcott rotor (docs/solvers.md, reference cases): mass ``m``, rotating-frame
+    stiffnesses ``k_x``, ``k_y``, stationary damping ``c``, unbalance ``e`` at angle ``beta``,
+    speed ``W``, optional gravity ``g`` along ``-y``.
 
     The system is built in the inertial frame with ``w1 = W``:
     ``K(t) = k_m I + k_d [[cos 2Wt, sin 2Wt], [sin 2Wt, -cos 2Wt]]``.
@@ -112,7 +112,7 @@ class Jeffcott:
 
     @property
     def unstable(self) -> bool:
-        """Closed-form instability criterion (DESIGN.md §7)."""
+        """Closed-form instability criterion (docs/solvers.md, reference cases)."""
         mW2 = self.m * self.W**2
         return (self.kx - mW2) * (self.ky - mW2) + (self.c * self.W) ** 2 < 0
 
@@ -136,7 +136,7 @@ class Jeffcott:
 def assembled_reference(
     omega: float, M: dict, D: dict, K: dict, f: dict, H: np.ndarray
 ) -> np.ndarray:
-    """Dense harmonic balance written from DESIGN.md §2, solved by ``numpy.linalg.solve``.
+    """Dense harmonic balance written from docs/conventions.md, solved by ``numpy.linalg.solve``.
 
     Row block ``m``, column block ``n``: ``-(n w1)^2 M_{m-n} + i n w1 D_{m-n} + K_{m-n}``.
     The coefficient dicts must hold both signs of every harmonic.
@@ -162,7 +162,7 @@ def _jeffcott_unbalance(name: str, W: float, expect_unstable: bool, sparse: bool
     rotor = Jeffcott(W=W)
     assert rotor.unstable == expect_unstable, f"{name}: speed not where the case says"
     if expect_unstable:
-        # A periodic solution exists but is not physical: never a success (DESIGN.md §6).
+        # A periodic solution exists but is not physical: never a success (docs/stability.md).
         converge: frozenset[str] = frozenset()
         fail = {
             "perturbation": frozenset({1, 2, 4}),

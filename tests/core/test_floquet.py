@@ -5,7 +5,7 @@
 * Damped Mathieu: ``y = e^{-ct/2} u`` maps it onto Mathieu with ``a - c^2/4``.
 * Isotropic shaft with rotating internal damping: threshold ``W_th = w_n (1 + c_n/c_r)``,
   circulatory stiffness built by sampling ``R D_B R'^T`` in time.
-* Asymmetric Jeffcott rotor: closed-form unstable band (DESIGN.md §7).
+* Asymmetric Jeffcott rotor: closed-form unstable band (docs/solvers.md, reference cases).
 """
 
 from __future__ import annotations
@@ -132,7 +132,7 @@ def test_damped_mathieu_inside_band(m: int, q: float) -> None:
 def rotating_damping_system(W: float, m: float, k: float, c_n: float, c_r: float):
     """Isotropic 2-DOF Jeffcott: stationary damping ``c_n``, rotating damping ``c_r``.
 
-    DESIGN.md §5: ``D += R D_B R^T`` and ``K += R D_B R'^T`` with ``D_B = c_r I`` in body
+    docs/rotating-bodies.md: ``D += R D_B R^T`` and ``K += R D_B R'^T`` with ``D_B = c_r I`` in body
     axes. Both are sampled at 16 times over one revolution and Fourier transformed, so the
     coefficients do not rely on the closed form ``c_r W [[0, 1], [-1, 0]]``.
     """
@@ -182,7 +182,8 @@ def test_rotating_damping_threshold(ratio: float) -> None:
 
 @pytest.mark.parametrize("W", [0.3, 0.85, 0.95, 1.0, 1.05, 1.2, 2.0])
 def test_asymmetric_rotor_band(W: float) -> None:
-    """Unstable iff ``(k_x - m W^2)(k_y - m W^2) + c^2 W^2 < 0`` (DESIGN.md §7)."""
+    """Unstable iff ``(k_x - m W^2)(k_y - m W^2) + c^2 W^2 < 0`` (docs/solvers.md, reference
+    cases)."""
     rotor = Jeffcott(W=W, e=0.0)
     M, D, K, _ = rotor.coefficients()
     s = rl.PeriodicSystem(W, M={0: M[0]}, D={0: D[0]}, K={0: K[0], 2: K[2]})

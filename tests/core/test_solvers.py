@@ -65,7 +65,7 @@ def test_catalogue(case: Case, method: str, backend: str) -> None:
 
 
 def test_gravity_case_gmres_few_iterations_and_perturbation_contraction() -> None:
-    """DESIGN.md §3: at half the critical speed the perturbation contraction factor is
+    """docs/solvers.md: at half the critical speed the perturbation contraction factor is
     ``rho = sqrt(eps^2 / (2 zeta)) = 1.414`` although the rotor is stable; GMRES needs < 10."""
     system = gravity_rotor().system()
     sol = rl.solve(system, 16, method="gmres")

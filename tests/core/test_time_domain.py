@@ -2,7 +2,7 @@
 
 The time functions are written here as cosine/sine series (``X(t) = C_0 + sum_k C_k cos k w t
 + S_k sin k w t``); the Fourier coefficients handed to rheolin are ``X_k = (C_k - i S_k) / 2``,
-so the convention of DESIGN.md §2 is under test too. The ODE ``M(t) q'' + D(t) q' + K(t) q =
+so the convention of docs/conventions.md is under test too. The ODE ``M(t) q'' + D(t) q' + K(t) q =
 f(t)`` is integrated from rest until the transient has decayed, then the last period is
 compared with ``Solution.evaluate``.
 
@@ -242,7 +242,7 @@ def test_positive_definite_mass() -> None:
 
 
 def test_gravity_rotor_against_shooting() -> None:
-    """The DESIGN.md §3 case (perturbation diverges, rotor stable): the periodic solution by
+    """The docs/solvers.md case (perturbation diverges, rotor stable): the periodic solution by
     shooting (state transition over one period of ``K(t)``, ``T = pi / W``) against gmres."""
     rotor = gravity_rotor()
     f = rotor.coefficients()[3]

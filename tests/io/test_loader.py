@@ -85,6 +85,7 @@ speed = "2000 rpm"
 name = "a"
 positions = "0 50 100 mm"
 outer_diameter = "30 mm"
+material = "steel"            # E, nu and density of steel (disks too)
 disks = [{ node = 1, outer_diameter = "44 mm", width = "20 mm", unbalance = "5 g*mm" }]
 
 [[shafts.bearings]]
@@ -105,6 +106,7 @@ name = "b"
 positions = [0.0, 0.05, 0.1]
 origin = ["60 mm", 0, 0]
 outer_diameter = 0.04
+material = "steel"
 disks = [{ node = 1, mass = 0.7706, inertia = [3.4e-4, 3.4e-4, 6.17e-4], unbalance = 1e-5 }]
 
 [[shafts.bearings]]

@@ -50,7 +50,7 @@ def test_cross_coupled_bearing_harmonic_force_real_arithmetic():
 @pytest.mark.parametrize("W", [40.0, 75.0, 120.0])
 def test_rotating_frame_spring_is_the_asymmetric_jeffcott_rotor(W):
     """Unbalanced rigid rotor on a spring defined in its own axes (k_x != k_y) with stationary
-    damping c: z = x + i y = P exp(iWt), DESIGN.md section 7 closed form."""
+    damping c: z = x + i y = P exp(iWt), docs/solvers.md, reference cases closed form."""
     m, kx, ky, c, U, beta = 2.0, 4e3, 1.6e4, 15.0, 2e-4, 0.4
     model = Model()
     model.add_rigid_body("rotor", (0, 0, 0), m, (1e-3, 1e-3, 2e-3))

@@ -1,4 +1,5 @@
-"""Rigid node: closed forms and a full nonlinear Newton–Euler simulation (DESIGN.md section 5)."""
+"""Rigid node: closed forms and a full nonlinear Newton–Euler simulation
+(docs/rotating-bodies.md)."""
 
 from __future__ import annotations
 

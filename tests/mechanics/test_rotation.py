@@ -110,7 +110,7 @@ def test_rotating_damping_instability_threshold():
 
 
 def test_asymmetric_jeffcott_unbalance_response_closed_form():
-    # DESIGN.md section 7: z = x + i y = P exp(i W t) exactly
+    # docs/solvers.md, reference cases: z = x + i y = P exp(i W t) exactly
     m, kx, ky, c, ecc, beta, W = 1.5, 6e4, 4e4, 20.0, 1e-4, 0.7, 150.0
     e = np.array([0.0, 0.0, 1.0])
     K = rotate_body_matrix(np.diag([kx, ky, 1e5]), e, 1)

@@ -1,4 +1,4 @@
-"""Stability maps of assembled models against closed forms (DESIGN.md §6, §7).
+"""Stability maps of assembled models against closed forms (docs/stability.md, docs/solvers.md).
 
 * Asymmetric Jeffcott rotor: a massless shaft with ``I_y != I_z`` and a midspan disk, and a
   rigid rotor on a spring fixed in its own axes; band ``(k_x - m W^2)(k_y - m W^2) + c^2 W^2

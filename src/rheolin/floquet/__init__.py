@@ -1,4 +1,4 @@
-"""Floquet stability of the periodic system by Hill's method (DESIGN.md §6, docs/stability.md).
+"""Floquet stability of the periodic system by Hill's method (docs/stability.md, docs/stability.md).
 
 Three paths over the same (balanced) Hill pencil ``lambda B y = A y``:
 

@@ -20,7 +20,16 @@ from ..errors import ModelError
 from ..mechanics.joints import COMPONENTS
 from ..mechanics.model import Model
 from ..mechanics.sections import general_section
-from .schema import Bearing, CondensedBody, ModelFile, Shaft, field_path, table_class
+from .schema import (
+    MATERIALS,
+    Bearing,
+    CondensedBody,
+    ModelFile,
+    Shaft,
+    field_path,
+    material_constant,
+    table_class,
+)
 from .units import UnitError, to_si
 
 __all__ = ["LoadedModel", "load_model", "parse_document", "parse_model", "read_model"]
@@ -217,7 +226,8 @@ class _Builder:
         for path, b in bodies:
             for i, d in enumerate(b.disks):
                 self._node(b.name, d.node, f"{path}.disks[{i}].node")
-                kw = d.model_dump(exclude={"node"})
+                kw = d.model_dump(exclude={"node", "material"})
+                kw["density"] = self._disk_density(d, f"{path}.disks[{i}]", b)
                 self._call(f"{path}.disks[{i}]", self.model.add_disk, b.name, d.node, **kw)
             for i, j in enumerate(b.bearings):
                 self._bearing(b.name, j, f"{path}.bearings[{i}]")
@@ -239,6 +249,43 @@ class _Builder:
             self._call("model.gravity", self.model.set_gravity, spec.model.gravity)
         self._call("meshes", self.model.speed_plan)  # kinematic consistency of the gear train
         return self.model
+
+    @staticmethod
+    def _disk_density(d: Any, path: str, body: Any) -> float:
+        """A disk given by its dimensions needs its density, or a named material (its own,
+        else its shaft's)."""
+        value = material_constant(d, "density")
+        if value is None and d.material is None:
+            value = material_constant(body, "density") if getattr(body, "material", None) else None
+        if value is not None:
+            return value
+        if d.outer_diameter is not None or d.width is not None:
+            raise ModelError(
+                f"{path}.density: required for a disk given by `outer_diameter` and `width` "
+                f'(or name a material, `material = "steel"`; known: {", ".join(MATERIALS)}); '
+                "rheolin assumes no material"
+            )
+        return 0.0  # given by mass and inertia: the density is not used
+
+    @staticmethod
+    def _shaft_constants(b: Shaft, path: str) -> dict[str, Any]:
+        """Elastic modulus, Poisson's ratio (unless the shear modulus is given), density:
+        given (one value or one per element), or from a named material."""
+        out: dict[str, Any] = {}
+        for key in ("elastic_modulus", "poisson_ratio", "density"):
+            if key == "poisson_ratio" and b.shear_modulus is not None:
+                if b.poisson_ratio is not None:
+                    out[key] = _one(b.poisson_ratio)
+                continue
+            value = getattr(b, key)
+            value = _one(value) if value is not None else material_constant(b, key)
+            if value is None:
+                raise ModelError(
+                    f'{path}.{key}: required (or name a material, `material = "steel"`; '
+                    f"known: {', '.join(MATERIALS)}); rheolin assumes no material"
+                )
+            out[key] = value
+        return out
 
     def _file(self, path: str, b: CondensedBody) -> Path:
         f = Path(b.path)
@@ -280,9 +327,7 @@ class _Builder:
                 b.positions,
                 outer_diameter=_one(b.outer_diameter),
                 inner_diameter=_one(b.inner_diameter),
-                elastic_modulus=_one(b.elastic_modulus),
-                poisson_ratio=_one(b.poisson_ratio),
-                density=_one(b.density),
+                **self._shaft_constants(b, path),
                 material_damping=b.material_damping,
                 axis=b.axis,
                 origin=b.origin,

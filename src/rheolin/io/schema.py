@@ -44,6 +44,38 @@ def _quantity(kind: str, sign: str = "") -> Callable[[Any], float]:
     return convert
 
 
+def _angle_between(low_deg: float, high_deg: float) -> Callable[[Any], float]:
+    """An angle in the open interval ``(low_deg, high_deg)`` degrees (stored in radians)."""
+
+    def convert(value: Any) -> float:
+        v = to_si(value, "angle")
+        if not np.radians(low_deg) < v < np.radians(high_deg):
+            raise UnitError(
+                f"must lie strictly between {low_deg:g} and {high_deg:g} deg, got {value!r}"
+                + (" (a plain number is radians)" if not isinstance(value, str) else "")
+            )
+        return v
+
+    return convert
+
+
+def _plain_length_at_most(limit: float, what: str) -> Callable[[Any], Any]:
+    """Refuse a plain number (metres) above ``limit`` m where units were surely forgotten
+    (``outer_diameter = 30`` is 30 m, not 30 mm); values with units pass unchanged."""
+
+    def check(value: Any) -> Any:
+        items = value if isinstance(value, list) else [value]
+        for x in items:
+            if isinstance(x, int | float) and not isinstance(x, bool) and abs(x) > limit:
+                raise UnitError(
+                    f"a plain number is metres: {x!r} m is not a plausible {what} (allowed: up "
+                    f"to {limit:g} m); give units, e.g. '{x:g} mm'"
+                )
+        return value
+
+    return check
+
+
 def _vector(kind: str, sign: str = "") -> Callable[[Any], list[float]]:
     one = _quantity(kind, sign)
 
@@ -68,7 +100,8 @@ def _vector(kind: str, sign: str = "") -> Callable[[Any], list[float]]:
 
 
 Angle = Annotated[float, BeforeValidator(_quantity("angle"))]
-AnglePos = Annotated[float, BeforeValidator(_quantity("angle", "+"))]
+PressureAngle = Annotated[float, BeforeValidator(_angle_between(0.0, 90.0))]
+HelixAngle = Annotated[float, BeforeValidator(_angle_between(-90.0, 90.0))]
 AreaPos = Annotated[float, BeforeValidator(_quantity("area", "+"))]
 CoupleUnbalanceNonNeg = Annotated[float, BeforeValidator(_quantity("couple_unbalance", "0+"))]
 DampingNonNeg = Annotated[float, BeforeValidator(_quantity("damping", "0+"))]
@@ -90,11 +123,33 @@ VecForce = Annotated[list[float], BeforeValidator(_vector("force"))]
 VecLength = Annotated[list[float], BeforeValidator(_vector("length"))]
 VecLengthPos = Annotated[list[float], BeforeValidator(_vector("length", "+"))]
 VecLengthNonNeg = Annotated[list[float], BeforeValidator(_vector("length", "0+"))]
+#: Largest plain-number shaft diameter [m]: the largest marine shafts are about 1 m.
+MAX_PLAIN_SHAFT_DIAMETER = 5.0
+#: Largest plain-number disk dimension [m] (large hydro-generator rotors).
+MAX_PLAIN_DISK_SIZE = 25.0
+ShaftDiameter = Annotated[
+    VecLengthPos, BeforeValidator(_plain_length_at_most(MAX_PLAIN_SHAFT_DIAMETER, "shaft diameter"))
+]
+ShaftBore = Annotated[
+    VecLengthNonNeg,
+    BeforeValidator(_plain_length_at_most(MAX_PLAIN_SHAFT_DIAMETER, "shaft diameter")),
+]
+DiskSize = Annotated[
+    LengthPos, BeforeValidator(_plain_length_at_most(MAX_PLAIN_DISK_SIZE, "disk size"))
+]
+DiskBore = Annotated[
+    LengthNonNeg, BeforeValidator(_plain_length_at_most(MAX_PLAIN_DISK_SIZE, "disk size"))
+]
 VecMoment = Annotated[list[float], BeforeValidator(_vector("moment"))]
 VecPressurePos = Annotated[list[float], BeforeValidator(_vector("pressure", "+"))]
 VecDensityNonNeg = Annotated[list[float], BeforeValidator(_vector("density", "0+"))]
 VecSpeedNonNeg = Annotated[list[float], BeforeValidator(_vector("speed", "0+"))]
 Index = Annotated[int, Field(ge=0, strict=True)]
+
+#: Harmonics of a rectangular-wave mesh stiffness beyond this are refused: the 500th of a
+#: contact-ratio wave is below 1e-3 of the first, and each adds two generators to the
+#: harmonic set (its size, and the memory, grow with their number).
+MAX_STIFFNESS_HARMONICS = 500
 Name = Annotated[str, Field(min_length=1)]
 Raw = float | int | str | list[Any]  # matrices whose units depend on components
 
@@ -124,8 +179,8 @@ class Section(_Strict):
     Iy: SecondMomentPos
     Iz: SecondMomentPos
     torsion_constant: SecondMomentPos
-    kappa_y: float = Field(default=float("inf"), gt=0)
-    kappa_z: float = Field(default=float("inf"), gt=0)
+    kappa_y: float = Field(default=float("inf"), ge=1e-3)  # shear coefficient (inf: no shear)
+    kappa_z: float = Field(default=float("inf"), ge=1e-3)
 
 
 class Disk(_Strict):
@@ -134,10 +189,11 @@ class Disk(_Strict):
     node: Index
     mass: MassNonNeg | None = None
     inertia: list[Any] | None = None
-    outer_diameter: LengthPos | None = None
-    width: LengthPos | None = None
-    density: DensityPos = 7850.0
-    inner_diameter: LengthNonNeg = 0.0
+    outer_diameter: DiskSize | None = None
+    width: DiskSize | None = None
+    density: DensityPos | None = None
+    material: Material | None = None
+    inner_diameter: DiskBore = 0.0
     unbalance: UnbalanceNonNeg = 0.0
     unbalance_angle: Angle = 0.0
     couple_unbalance: CoupleUnbalanceNonNeg = 0.0
@@ -173,6 +229,26 @@ def _inertia_matrix(value: list[Any] | None, definite: bool = True) -> list[Any]
             f"point mass); eigenvalues {eig}"
         )
     return J.tolist()
+
+
+#: Materials a file may name instead of giving the constants (``material = "steel"``):
+#: elastic modulus [Pa], Poisson's ratio, density [kg/m^3]. Explicit keys override them.
+MATERIALS: dict[str, dict[str, float]] = {
+    "steel": {"elastic_modulus": 2.1e11, "poisson_ratio": 0.3, "density": 7850.0},
+    "stainless_steel": {"elastic_modulus": 1.93e11, "poisson_ratio": 0.29, "density": 8000.0},
+    "cast_iron": {"elastic_modulus": 1.1e11, "poisson_ratio": 0.26, "density": 7200.0},
+    "aluminium": {"elastic_modulus": 7.0e10, "poisson_ratio": 0.33, "density": 2700.0},
+    "titanium": {"elastic_modulus": 1.14e11, "poisson_ratio": 0.34, "density": 4430.0},
+}
+Material = Literal["steel", "stainless_steel", "cast_iron", "aluminium", "titanium"]
+
+
+def material_constant(table: Any, key: str) -> float | None:
+    """``table.key``, else the value of its named ``material`` (None when neither)."""
+    value = getattr(table, key)
+    if value is None and getattr(table, "material", None) is not None:
+        return MATERIALS[table.material][key]
+    return None if value is None else float(value)
 
 
 Components = Literal["all"] | list[Literal["ux", "uy", "uz", "phix", "phiy", "phiz"]]
@@ -231,14 +307,15 @@ class Shaft(_Body):
     """``Model.add_shaft`` plus the shaft's disks and bearings."""
 
     positions: VecLength
-    outer_diameter: VecLengthPos | None = None
-    inner_diameter: VecLengthNonNeg = [0.0]
-    outer_diameter_right: VecLengthPos | None = None
-    inner_diameter_right: VecLengthNonNeg | None = None
-    elastic_modulus: VecPressurePos = [2.1e11]
+    outer_diameter: ShaftDiameter | None = None
+    inner_diameter: ShaftBore = [0.0]
+    outer_diameter_right: ShaftDiameter | None = None
+    inner_diameter_right: ShaftBore | None = None
+    elastic_modulus: VecPressurePos | None = None
     poisson_ratio: list[Annotated[float, Field(gt=-1.0, lt=0.5)]] | float | None = None
     shear_modulus: VecPressurePos | None = None
-    density: VecDensityNonNeg = [7850.0]
+    density: VecDensityNonNeg | None = None
+    material: Material | None = None
     material_damping: TimeNonNeg = 0.0
     origin: VecLength = [0.0, 0.0, 0.0]
     section: Section | None = None
@@ -291,13 +368,13 @@ class Mesh(_Strict):
     pinion_teeth: int = Field(ge=1, strict=True)
     gear_teeth: int = Field(ge=1, strict=True)
     module: LengthPos
-    pressure_angle: AnglePos = float(np.radians(20.0))
-    helix_angle: Angle = 0.0
+    pressure_angle: PressureAngle = float(np.radians(20.0))
+    helix_angle: HelixAngle = 0.0
     stiffness: StiffnessNonNeg | None = None
     contact_ratio: float | None = Field(default=None, ge=1.0, le=2.0)
     single_stiffness: StiffnessNonNeg | None = None
     double_stiffness: StiffnessNonNeg | None = None
-    stiffness_harmonics: int = Field(default=10, ge=0, strict=True)
+    stiffness_harmonics: int = Field(default=10, ge=0, le=MAX_STIFFNESS_HARMONICS, strict=True)
     damping: DampingNonNeg = 0.0
     transmission_error: list[TransmissionError] = []
     side: Literal[1, -1] = 1

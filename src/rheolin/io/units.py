@@ -20,7 +20,7 @@ import math
 from functools import lru_cache
 from typing import Any
 
-__all__ = ["DIMENSIONS", "UnitError", "to_si"]
+__all__ = ["DIMENSIONS", "SI_RANGE", "UnitError", "to_si"]
 
 #: Quantity kinds: SI unit they convert to, and an example for error messages.
 DIMENSIONS: dict[str, tuple[str, str]] = {
@@ -51,6 +51,11 @@ DIMENSIONS: dict[str, tuple[str, str]] = {
     "frequency": ("Hz", "5 kHz"),
     "dimensionless": ("", "0.3"),
 }
+
+
+#: Nonzero magnitudes accepted in SI units: beyond them products of a few quantities (mass x
+#: speed squared x length...) overflow or underflow double precision.
+SI_RANGE = (1e-24, 1e24)
 
 
 class UnitError(ValueError):
@@ -85,6 +90,11 @@ def to_si(value: Any, kind: str) -> float:
         )
     if not math.isfinite(out):
         raise UnitError(f"must be finite, got {value!r}")
+    if out != 0.0 and not SI_RANGE[0] <= abs(out) <= SI_RANGE[1]:
+        raise UnitError(
+            f"{value!r} is {out:.3g} {unit or '(no unit)'}: outside the magnitudes rheolin "
+            f"computes with ({SI_RANGE[0]:g} to {SI_RANGE[1]:g} in SI units, or 0)"
+        )
     return out
 
 
@@ -102,6 +112,11 @@ def _parse(text: str, kind: str, unit: str, example: str) -> float:
             raise UnitError(f"expected a speed like {example!r}, got {text!r}")
         return float(q.to("Hz").magnitude) * 2.0 * math.pi
     target = ureg.Quantity(1.0, unit) if unit else ureg.Quantity(1.0)
+    if unit and q.dimensionless and str(q.units) == "dimensionless":
+        raise UnitError(
+            f"expected a {kind.replace('_', ' ')} in {unit}, got {text!r} without a unit; "
+            f"write it like {example!r} (plain TOML numbers, not strings, are SI)"
+        )
     if q.dimensionality != target.dimensionality:
         raise UnitError(
             f"expected a {kind.replace('_', ' ')} in {unit or 'no unit'} (e.g. {example!r}), "

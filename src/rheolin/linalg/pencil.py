@@ -1,4 +1,5 @@
-"""The time-averaged pencil ``A0(n) = K_0 + s D_0 + s^2 M_0``, ``s = i n w1`` (DESIGN.md §2)."""
+"""The time-averaged pencil ``A0(n) = K_0 + s D_0 + s^2 M_0``, ``s = i n w1``
+(docs/conventions.md)."""
 
 from __future__ import annotations
 

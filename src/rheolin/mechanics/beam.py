@@ -5,7 +5,7 @@ node ``(u, v, w, theta_x, theta_y, theta_z)``. Axial, torsion and two bending pl
 deformation (Timoshenko factors ``Phi = 12 E I / (kappa G A L^2)``); consistent translational
 mass with shear (Friedman & Kosmatka 1993).
 
-Rotary inertia, the choice made here (DESIGN.md section 5):
+Rotary inertia, the choice made here (docs/rotating-bodies.md):
 
 * ``rotary="consistent"`` (default for axisymmetric sections): consistent rotary inertia of both
   bending planes and of torsion in ``M_B``, and the consistent gyroscopic matrix

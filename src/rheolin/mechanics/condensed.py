@@ -3,8 +3,8 @@
 The body's DOFs are node-major, 6 per node ``(u, phi)`` in body axes; ``nodes`` maps body node
 ``i`` to the global node ``nodes[i]``. ``frame`` holds the body axes in global coordinates (as
 columns) at ``t = 0``. The body spins at ``W = s * w1`` about ``axis`` (global); its nodes must
-lie on the spin axis (their reference positions do not move). Contributions (DESIGN.md
-section 5)::
+lie on the spin axis (their reference positions do not move). Contributions
+(docs/rotating-bodies.md)::
 
     M += Rt M_B Rt^T,   D += Rt D_B Rt^T + W Rt G_B Rt^T,   K += Rt K_B Rt^T + Rt D_B Rt'^T
 
@@ -73,6 +73,33 @@ def load_matrix(path: str | Path) -> np.ndarray:
     return np.asarray(a, dtype=float)
 
 
+#: Relative tolerance of the symmetry and (semi-)definiteness checks of condensed matrices.
+DEFINITE_RTOL = 1e-9
+
+_MATRIX_NAME = {"M": "mass", "K": "stiffness", "D": "damping"}
+
+
+def _check_semidefinite(name: str, x: np.ndarray) -> None:
+    """Refuse a condensed mass, stiffness or damping matrix that is not symmetric positive
+    semidefinite (to :data:`DEFINITE_RTOL` of its largest entry); the mass must also have a
+    positive diagonal somewhere (not all zero)."""
+    what = f"`{name}` (the {_MATRIX_NAME[name]} matrix)"
+    scale = float(np.abs(x).max(initial=0.0))
+    if name == "M" and scale == 0.0:
+        raise ModelError(f"{what} is zero; a body needs mass")
+    if scale == 0.0:
+        return
+    asym = float(np.abs(x - x.T).max()) / scale
+    if asym > 1e-8:
+        raise ModelError(f"{what} must be symmetric; largest |A - A^T| / max|A| = {asym:.3g}")
+    low = float(sla.eigh(0.5 * (x + x.T), eigvals_only=True, subset_by_index=[0, 0])[0])
+    if low < -DEFINITE_RTOL * scale * x.shape[0]:
+        raise ModelError(
+            f"{what} must be positive semidefinite; its smallest eigenvalue is {low:.4g} "
+            f"(largest entry {scale:.4g}); allowed: eigenvalues >= 0"
+        )
+
+
 @dataclass(frozen=True)
 class CondensedBody:
     """A body given by condensed matrices in body axes.
@@ -125,6 +152,8 @@ class CondensedBody:
                     f"`{name}` must be a finite {n}x{n} matrix (6 DOFs x {nodes.size} nodes "
                     f"+ {self.n_modes} modes), got shape {x.shape}"
                 )
+            if name in ("M", "K", "D"):
+                _check_semidefinite(name, x)
             object.__setattr__(self, name, x)
         T = np.eye(3) if self.frame is None else np.asarray(self.frame, dtype=float)
         if T.shape != (3, 3) or not np.allclose(T.T @ T, np.eye(3), atol=1e-10):

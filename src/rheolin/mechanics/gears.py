@@ -1,7 +1,7 @@
 """Gear meshes (spur and helical) as a time-varying spring along the line of action.
 
 The relative approach of the two flanks along the unit normal ``n`` at the contact point ``P``
-is ``delta = w^T q`` with, for pinion node ``a`` and gear node ``b`` (DESIGN.md section 5)::
+is ``delta = w^T q`` with, for pinion node ``a`` and gear node ``b`` (docs/rotating-bodies.md)::
 
     w = ( n, (P - x_a) x n, -n, -(P - x_b) x n )
 

@@ -5,7 +5,7 @@ ground) through a 6x6 stiffness ``K_J`` and damping ``D_J`` over ``(ux, uy, uz, 
 phiz)``. Its contribution to the node pair is ``[[X, -X], [-X, X]]``.
 
 * In the inertial frame (bearings, housings): constant, harmonic 0 only.
-* In the axes of a body spinning at ``W = s w1`` about ``e`` (DESIGN.md section 5):
+* In the axes of a body spinning at ``W = s w1`` about ``e`` (docs/rotating-bodies.md):
   ``K(t) += R K_J R^T`` and, for damping acting on the body-frame rate,
   ``D(t) += R D_J R^T``, ``K(t) += R D_J R'^T`` with ``R = blockdiag(R(t), R(t))``.
 """

@@ -1,4 +1,4 @@
-"""Rigid node (disk, gear blank, coupling) spinning with its body (DESIGN.md section 5).
+"""Rigid node (disk, gear blank, coupling) spinning with its body (docs/rotating-bodies.md).
 
 A rigid node has mass ``m``, centre-of-mass offset ``c_B`` from the node (static unbalance
 ``m c_B``) and inertia tensor ``J_B`` about the centre of mass, both in body axes (which coincide

@@ -1,4 +1,4 @@
-"""Exact Fourier coefficients of uniformly rotating body-frame quantities (DESIGN.md section 5).
+"""Exact Fourier coefficients of uniformly rotating body-frame quantities (docs/rotating-bodies.md).
 
 A body spinning at ``W = s * w1`` about the unit axis ``e`` has the rotation
 

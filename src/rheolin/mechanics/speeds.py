@@ -1,4 +1,4 @@
-"""Exact speeds of geared bodies and the base frequency ``w1`` (DESIGN.md section 4).
+"""Exact speeds of geared bodies and the base frequency ``w1`` (docs/conventions.md, harmonic sets).
 
 Speed ratios through gear pairs are ratios of tooth counts, so they are kept as
 :class:`fractions.Fraction`. The base frequency ``w1`` is the largest frequency of which every

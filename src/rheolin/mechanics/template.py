@@ -2,8 +2,8 @@
 
 The input speed enters the periodic system only through ``w1 = base_ratio * speed``, and every
 coefficient is a polynomial of degree <= 2 in ``w1`` (gyroscopic and circulatory terms are
-linear, centripetal ones quadratic, DESIGN.md §5) whose harmonic indices do not depend on the
-speed. The template reads the model once, sums every element's
+linear, centripetal ones quadratic, docs/rotating-bodies.md) whose harmonic indices do not
+depend on the speed. The template reads the model once, sums every element's
 :class:`~rheolin.mechanics._term.SpeedTerm` into one CSR pattern per (matrix, harmonic) with one
 row of values per power of ``w1``, and at each speed forms ``X^(0) + w1 X^(1) + w1^2 X^(2)`` on
 those patterns: one vector operation per coefficient instead of rebuilding the elements.

@@ -25,9 +25,10 @@ def plot_stability(map: Any, path: str | Path) -> Path:
     """Stability map as a PNG.
 
     Largest Floquet real part [1/s] against input speed [rpm] (symmetric-log axis when
-    damped and growing values must both show, else linear up to zero), the per-speed decision tolerance as a grey band,
-    unstable samples as red dots, unstable ranges shaded red and labelled with their bounds
-    and mechanism; speeds whose verdict the truncation could still flip are marked with crosses.
+    damped and growing values must both show, else linear up to zero), the per-speed
+    decision tolerance as a grey band, unstable samples as red dots, unstable ranges shaded
+    red and labelled with their bounds and mechanism; speeds whose verdict the truncation
+    could still flip are marked with crosses.
 
     Parameters
     ----------

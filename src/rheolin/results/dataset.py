@@ -60,9 +60,26 @@ def floquet_attrs(sol: Solution) -> dict[str, Any]:
     return out
 
 
-def stability_text(stable: bool | None) -> str:
-    """``"stable"``, ``"unstable"`` or ``"not checked"``."""
-    return "not checked" if stable is None else ("stable" if stable else "unstable")
+def stability_text(
+    stable: bool | None, decided: bool | None = None, max_real: float | None = None
+) -> str:
+    """``"stable"``, ``"unstable"``, ``"undecided"`` or ``"not checked"``.
+
+    A "stable" verdict is reported ``"undecided"`` when the truncation could still flip it
+    (``decided`` False) or when the largest Floquet real part is positive (inside its
+    tolerance, e.g. at an absurd speed where the tolerance grows with the frequencies): a
+    positive real part is never reported as stable.
+
+    >>> stability_text(True), stability_text(True, max_real=1e-3), stability_text(None)
+    ('stable', 'undecided', 'not checked')
+    """
+    if stable is None:
+        return "not checked"
+    if not stable:
+        return "unstable"
+    if decided is False or (max_real is not None and max_real > 0):
+        return "undecided"
+    return "stable"
 
 
 def _parts(z: np.ndarray) -> np.ndarray:
@@ -159,7 +176,14 @@ def point_dataset(
             "message": sol.message,
             "iterations": int(sol.iterations),
             "residual": float(sol.residual),
-            "stability": stability_text(sol.stable),
+            "residual_kind": "backward error ||f - A q|| / (||A|| ||q|| + ||f||)",
+            "relative_residual": float(sol.info.get("relative_residual", float("nan"))),
+            "rtol": float(point.settings.get("rtol", float("nan"))),
+            "stability": stability_text(
+                sol.stable,
+                None if sol.floquet is None else bool(sol.floquet.decided),
+                sol.max_floquet_real,
+            ),
             "max_floquet_real": float("nan")
             if sol.max_floquet_real is None
             else float(sol.max_floquet_real),

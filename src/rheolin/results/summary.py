@@ -15,6 +15,7 @@ import xarray as xr
 
 from ..io.atomic import atomic_write
 from .dataset import complex_values
+from .schema import SCHEMA_VERSION
 
 __all__ = ["summarize", "write_summary"]
 
@@ -53,14 +54,17 @@ def summarize(ds: xr.Dataset) -> dict[str, Any]:
         "requested_method",
         "success",
     )
-    keys += ("status", "message", "iterations", "residual", "stability", "max_floquet_real")
+    keys += ("status", "message", "iterations", "residual", "residual_kind", "relative_residual")
+    keys += ("rtol", "stability", "max_floquet_real")
     keys += ("stability_decided", "floquet_method", "floquet_lattice_order", "floquet_lattice_size")
     keys += ("leading_exponent_real", "leading_exponent_frequency_hz", "floquet_seconds")
     keys += ("stability_mechanism",)
     keys += ("harmonic_count", "closure_order", "max_order", "n_dof", "model_sha256")
-    out: dict[str, Any] = {k: _plain(ds.attrs.get(k)) for k in keys}
-    if out.get("stability_decided") is not None:
-        out["stability_decided"] = bool(out["stability_decided"])
+    out: dict[str, Any] = {"schema": "rheolin.summary", "schema_version": SCHEMA_VERSION}
+    out.update({k: _plain(ds.attrs.get(k)) for k in keys})
+    for flag in ("success", "stability_decided"):  # JSON booleans (docs/results-schema.md)
+        if out.get(flag) is not None:
+            out[flag] = bool(out[flag])
     q = complex_values(ds["displacement"])
     radial = np.hypot(np.abs(q.sel(component="ux")), np.abs(q.sel(component="uy")))
     radial = radial * xr.where(q["harmonic"] > 0, 2.0, 1.0)

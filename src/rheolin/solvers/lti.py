@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..errors import ModelError
 from ..operator import HarmonicBalance
 from .registry import Options, SolverOutcome, register
 
@@ -10,8 +11,8 @@ from .registry import Options, SolverOutcome, register
 def solve_lti(op: HarmonicBalance, opts: Options) -> SolverOutcome:
     """``q_n = A0(n)^-1 f_n``; refuses a system with time-varying coefficients."""
     if op.system.coefficient_harmonics:
-        raise ValueError(
-            "method='lti' needs time-invariant M, D, K, but the system has coefficient "
+        raise ModelError(
+            "--method / method='lti' needs time-invariant M, D, K, but the system has coefficient "
             f"harmonics {op.system.coefficient_harmonics}; use 'gmres', 'perturbation', "
             "'direct' or 'auto'"
         )

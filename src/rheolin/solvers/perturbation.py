@@ -12,7 +12,7 @@ from .registry import Options, SolverOutcome, register
 def solve_perturbation(op: HarmonicBalance, opts: Options) -> SolverOutcome:
     """Fixed-point iteration on the time-averaged system.
 
-    Converges iff the spectral radius of ``A0^-1 dA`` is below one (DESIGN.md §3). The
+    Converges iff the spectral radius of ``A0^-1 dA`` is below one (docs/solvers.md). The
     residual ``f - A q_j = dA (q_{j-1} - q_j)`` comes free from the next right-hand side.
     An initial guess ``x0`` (``options.x0``) is taken as ``q_{-1}``.
     Divergence is detected from the growth of the correction and reported with the

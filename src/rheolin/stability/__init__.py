@@ -1,4 +1,4 @@
-"""Stability maps and Campbell diagrams of rotating, time-periodic systems (DESIGN.md §6).
+"""Stability maps and Campbell diagrams of rotating, time-periodic systems (docs/stability.md).
 
 * :func:`campbell`: natural frequencies, damping and whirl of the time-averaged system against
   speed, order lines and their crossings (critical speeds).

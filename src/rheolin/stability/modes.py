@@ -21,6 +21,10 @@ __all__ = ["AveragedModes", "averaged_modes", "whirl_ratio"]
 
 #: Above this first-order size the averaged modes are found by shift-invert.
 DENSE_MODES_LIMIT = 1200
+#: Eigenvalues below this fraction of ``||A||_1 / ||B||_1`` of the first-order pencil are
+#: rigid-body modes (exactly zero; a sparse solve resolves their Jordan block only to about the
+#: square root of its tolerance), removed from the oscillatory modes.
+RIGID_MODE_RTOL = 1e-5
 #: ``|whirl ratio|`` above this is called forward or backward whirl.
 WHIRL_THRESHOLD = 0.5
 
@@ -35,10 +39,14 @@ class AveragedModes:
         ``lambda = -zeta w_n + i w_d`` [1/s].
     shapes
         Displacement shapes ``q`` (columns), unit 2-norm.
+    rigid_eigenvalues
+        Eigenvalues found at zero (within :data:`RIGID_MODE_RTOL` of the pencil's scale) and
+        left out: rigid-body modes (free axial or torsional motion), two per mode.
     """
 
     eigenvalues: np.ndarray
     shapes: np.ndarray
+    rigid_eigenvalues: int = 0
 
     @property
     def frequency(self) -> np.ndarray:
@@ -109,7 +117,11 @@ def averaged_modes(
     ok = np.isfinite(lam)
     lam, vec = lam[ok], vec[:, ok]
     scale = max(float(np.abs(lam).max()) if lam.size else 1.0, 1.0)
-    osc = lam.imag > 1e-9 * scale
+    # rigid-body modes (a free axial or torsional motion): eigenvalue 0, a Jordan block that
+    # shift-invert resolves only to about sqrt(tolerance) of the pencil's scale
+    zero = RIGID_MODE_RTOL * max(float(spla.norm(A, 1) / max(spla.norm(B, 1), 1e-300)), 1e-300)
+    rigid = np.abs(lam) <= zero
+    osc = (lam.imag > 1e-9 * scale) & ~rigid
     lam, vec = lam[osc], vec[:, osc]
     order = np.argsort(lam.imag, kind="stable")
     if n_modes is not None:
@@ -117,11 +129,12 @@ def averaged_modes(
     lam, q = lam[order], vec[:n, order] / sq[:, None]
     with np.errstate(under="ignore"):
         q = q / np.maximum(np.linalg.norm(q, axis=0), np.finfo(float).tiny)
-    return AveragedModes(lam, q)
+    return AveragedModes(lam, q, int(rigid.sum()))
 
 
 def _sparse_low_modes(A: sp.csc_array, B: sp.csc_array, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """Eigenvalues nearest 0 of ``lambda B y = A y`` (one sparse LU)."""
+    """Eigenvalues nearest 0 of ``lambda B y = A y`` (one sparse LU), from a fixed starting
+    vector so that repeated runs return the same modes."""
     size = A.shape[0]
     sigma = 0.0
     try:
@@ -130,7 +143,8 @@ def _sparse_low_modes(A: sp.csc_array, B: sp.csc_array, k: int) -> tuple[np.ndar
         sigma = -1e-3 * (spla.norm(A, 1) / max(spla.norm(B, 1), 1e-300))
         lu = spla.splu(sp.csc_array(A - sigma * B), permc_spec="MMD_ATA")
     op = spla.LinearOperator((size, size), matvec=lambda x: lu.solve(B @ x), dtype=complex)
-    nu, vec = spla.eigs(op, k=k, which="LM", tol=1e-12)
+    v0 = np.random.default_rng(0).standard_normal(size)  # fixed: the same modes every run
+    nu, vec = spla.eigs(op, k=k, which="LM", tol=1e-12, v0=v0.astype(complex))
     return sigma + 1.0 / nu, vec
 
 

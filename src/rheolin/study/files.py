@@ -26,6 +26,7 @@ import xarray as xr
 
 from ..io.atomic import atomic_write
 from ..results.dataset import write_dataset
+from ..results.schema import SCHEMA_VERSION
 from .store import CheckpointStore
 
 __all__ = ["plot_name", "sweep_table", "write_results"]
@@ -98,6 +99,8 @@ def sweep_table(result: Any) -> dict[str, Any]:
         )
     stable = ds["stable"].values
     return {
+        "schema": "rheolin.sweep",
+        "schema_version": SCHEMA_VERSION,
         "model_file": spec.source,
         "model_sha256": spec.model_sha256,
         "study_key": spec.key,

@@ -1,0 +1,42 @@
+"""The versioned schema of ``summary.json`` (``rheolin run``) and ``sweep.json`` (``sweep``).
+
+Both files carry ``"schema": "rheolin.summary"`` / ``"rheolin.sweep"`` and
+``"schema_version"`` (:data:`SCHEMA_VERSION`); flags are JSON booleans (``true``/``false``),
+a quantity that was not computed is ``null``. See ``docs/results-schema.md``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+__all__ = ["SCHEMA_VERSION", "Verdict", "point_verdict"]
+
+#: Version of the JSON result files; raised on every incompatible change.
+SCHEMA_VERSION = 1
+
+
+@dataclass
+class Verdict:
+    """Whether a run succeeded, and what a reader must be told about it."""
+
+    ok: bool
+    notes: list[str] = field(default_factory=list)
+
+
+def point_verdict(summary: dict[str, Any]) -> Verdict:
+    """The verdict of one operating point from its summary: ``ok`` when the solution
+    converged and is not unstable; ``notes`` say what is uncertain (an undecided stability
+    verdict, a truncated harmonic set).
+
+    >>> point_verdict({"success": True, "stability_decided": False}).notes[0][:22]
+    'stability is UNDECIDED'
+    """
+    notes = []
+    if summary.get("stability") == "undecided" or summary.get("stability_decided") is False:
+        notes.append(
+            "stability is UNDECIDED: the Floquet truncation could still flip the verdict "
+            "(docs/stability.md)"
+        )
+    notes += [str(w) for w in summary.get("warnings", [])]
+    return Verdict(bool(summary.get("success")), notes)
