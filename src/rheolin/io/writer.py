@@ -43,6 +43,25 @@ def _args(call: dict[str, Any], drop: tuple[str, ...] = ()) -> dict[str, Any]:
     return {k: _plain(v) for k, v in call.items() if v is not None and k not in drop}
 
 
+def _material(model: Any, method: str, t: dict[str, Any]) -> dict[str, Any]:
+    """Write the material constants a call took from the API's defaults: the file format
+    assumes no material (docs/model-format.md)."""
+    import inspect
+
+    params = inspect.signature(getattr(model, method)).parameters
+    keys = ("elastic_modulus", "density") if method != "add_disk" else ("density",)
+    if method == "add_disk" and t.get("outer_diameter") is None:
+        return t
+    for key in keys:
+        default = params[key].default if key in params else None
+        if key not in t and isinstance(default, (int, float)):
+            t[key] = float(default)
+    if method != "add_disk" and "shear_modulus" not in t and "poisson_ratio" not in t:
+        default = params["poisson_ratio"].default if "poisson_ratio" in params else None
+        t["poisson_ratio"] = 0.3 if default is None else float(default)
+    return t
+
+
 def _bearing(a: dict[str, Any]) -> dict[str, Any]:
     comps = a.get("components", ("ux", "uy"))
     out = _args(a, ("body",))
@@ -72,11 +91,11 @@ def model_to_toml(model: Any, path: str | Path | None = None) -> str:
     }  # fmt: skip
     for method, call in model.calls:
         if method == "add_shaft":
-            t = _args(call)
+            t = _material(model, method, _args(call))
             tables[call["name"]] = t
             lists["shafts"].append(t)
         elif method == "add_shaft_layer":
-            t = _args(call, ("shaft",))
+            t = _material(model, method, _args(call, ("shaft",)))
             tables[call["shaft"]].setdefault("layers", []).append(t)
         elif method == "add_rigid_body":
             t = _args(call)
@@ -92,7 +111,7 @@ def model_to_toml(model: Any, path: str | Path | None = None) -> str:
             tables[call["name"]] = t
             lists["condensed_bodies"].append(t)
         elif method == "add_disk":
-            t = _args(call, ("body",))
+            t = _material(model, method, _args(call, ("body",)))
             tables[call["body"]].setdefault("disks", []).append(t)
         elif method == "add_bearing":
             tables[call["body"]].setdefault("bearings", []).append(_bearing(call))
