@@ -41,8 +41,12 @@ def test_transposed_solves_solve_the_transposed_system(trans):
 def test_lattice_factor_in_a_new_thread_context():
     from rheolin.floquet.search import _pardiso_factor
 
-    A = _matrix(9000, 5)
-    b = np.ones(9000, dtype=complex)
+    # a 2-D grid operator (little fill) above the lattice's PARDISO threshold of 8,000
+    m = 95
+    T = sp.diags_array([-1.0, 4.0 + 0.5j, -1.3], offsets=[-1, 0, 1], shape=(m, m))
+    A = sp.csc_array(sp.kronsum(T, T))
+    A.sort_indices()
+    b = np.ones(A.shape[0], dtype=complex)
     for _ in range(2):  # a new lattice (holder) per context, as one Floquet call each
         holder = type("Hill", (), {})()
         with threadpool_limits(1):
