@@ -181,7 +181,16 @@ def lattice_exponents(
             for i in range(theta.size):
                 found_here.append(candidate(vecs[:, i], lam[i], len(shifts) - 1))
             mine = [c for c in found_here if c.centroid <= CENTRED and cid in c.families]
-            satisfied[0] = _count(_select(mine, {cid: need}, w, nh)) >= need
+            # the quota is judged jointly with the clusters already searched that these
+            # candidates can also stand for: two close modes (x and y on anisotropic
+            # bearings) must not both be satisfied by the one exponent nearest them, or a
+            # parametric exponent between them (a principal resonance) is never sought
+            joint = {f for c in mine for f in c.families if f in done} - {cid}
+            quota = {cid: need, **{f: done[f] for f in joint}}
+            cands = mine + [
+                c for c in pool if c.centroid <= CENTRED and joint.intersection(c.families)
+            ]
+            satisfied[0] = _count(_select(cands, quota, w, nh)) >= sum(quota.values())
             return satisfied[0]
 
         satisfied = [False]
@@ -189,11 +198,14 @@ def lattice_exponents(
         arnoldi_seconds += time.perf_counter() - t2
         for c in found_here:
             c.search = cid
-        if not satisfied[0]:
+        if satisfied[0]:
+            done[cid] = need
+        else:
             short.append(sigma)
         return found_here
 
     short: list[complex] = []
+    done: dict[int, int] = {}  # clusters whose search met its quota: their quotas
     clusters = _clusters(lam0, targets, w)
     quotas = {
         i: sum(1 if abs(lam0[c].imag) <= 1e-9 * scale0[c] else 2 for c in cl)
