@@ -347,3 +347,35 @@ def test_asymmetric_rotor_on_anisotropic_bearings_inside_its_band(rpm: float) ->
     assert ref > 1.0  # inside the band (README: about 4105-4340 rpm)
     assert not lat.stable and lat.decided and lat.complete
     assert lat.max_real == pytest.approx(ref, rel=1e-6)
+
+
+def test_leading_exponent_of_a_certified_mode_is_computed() -> None:
+    """A mode whose Gershgorin disc lies left of the axis needs no search for the verdict,
+    but when the disc reaches right of every computed exponent it may hold the leading one:
+    the reported largest real part must be the monodromy matrix's (here a lightly damped
+    mode at -0.098 1/s, once reported as -3.02 1/s, the best of the searched clusters)."""
+    import tomllib
+
+    from rheolin.data import example_path
+    from rheolin.io import parse_document
+
+    text = (
+        example_path("rotor")
+        .read_text()
+        .replace('"5e7 N/m", "4e7 N/m", "5e7 N/m"', '"4.559e6 N/m", "3.723e6 N/m", "4.559e6 N/m"')
+        .replace(
+            '[["5e7 N/m", "5e6 N/m"], ["5e6 N/m", "4e7 N/m"]]',
+            '[["4.559e6 N/m", "3.469e5 N/m"], ["3.469e5 N/m", "3.723e6 N/m"]]',
+        )
+        .replace(
+            '"500 N*s/m", "500 N*s/m", "500 N*s/m"', '"892.5 N*s/m", "892.5 N*s/m", "892.5 N*s/m"'
+        )
+        .replace('damping = ["500 N*s/m", "500 N*s/m"]', 'damping = ["892.5 N*s/m", "892.5 N*s/m"]')
+        .replace('Iz = "3.98 cm^4"', 'Iz = "4.259 cm^4"')
+    )
+    model = parse_document(tomllib.loads(text)).model
+    system = model.assemble(4165.4 * np.pi / 30).system
+    lat = rl.floquet(system, method="lattice")
+    ref = _monodromy_max_real_matrix(system)
+    assert lat.stable and lat.decided and ref < 0
+    assert lat.max_real == pytest.approx(ref, rel=1e-5)

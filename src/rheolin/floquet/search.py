@@ -230,6 +230,21 @@ def lattice_exponents(
     for cid in range(len(clusters)):
         if cid not in skipped:
             pool.extend(search(cid))
+    # a certified cluster may still hold the leading exponent (its disc reaches right of
+    # every computed one): search those too, rightmost disc first, so that the largest real
+    # part reported is an exponent's, not the best of the rest
+    full = {
+        i: sum(1 if abs(lam0[c].imag) <= 1e-9 * scale0[c] else 2 for c in cl)
+        for i, cl in enumerate(clusters)
+    }
+    right = {cid: float(np.max(lam0[clusters[cid]].real + discs[clusters[cid]])) for cid in skipped}
+    for cid in sorted(skipped, key=lambda c: -right[c]):
+        lead = max((c.lam.real for c in pool), default=-np.inf)
+        if right[cid] <= lead:
+            break
+        skipped.remove(cid)
+        quotas[cid] = full[cid]
+        pool.extend(search(cid))
 
     expected = int(sum(quotas.values()))
     reps = _select(pool, quotas, w, nh, share=share)
