@@ -286,7 +286,10 @@ def _floquet_lattice(
                 break
             used = max(used, est_finer)
             out = confirm_unresolved(system, out, finer)
-            steps.append(out.info.pop("confirmed"))
+            step = out.info.pop("confirmed")
+            steps.append(step)
+            if not step["clusters"]:
+                break  # nothing left that a finer lattice could settle
         if steps:
             out.info["confirmed"] = steps
     w = system.omega

@@ -29,10 +29,15 @@ def confirm_unresolved(
     """
     todo = out.unresolved & ~out.certified
     if not todo.any():
+        out.info["confirmed"] = {"order": finer.order, "clusters": 0, "replaced": 0, "confirmed": 0}
         return out
-    centres = np.unique(out.centre[todo & (out.centre.imag >= 0)])
+    # upper half plane, real centres included (their imaginary parts are rounding, of
+    # either sign)
+    upper = out.centre.imag >= -1e-9 * np.maximum(np.abs(out.centre), system.omega)
+    centres = np.unique(out.centre[todo & upper])
     centres = centres[np.isfinite(centres)]
     if centres.size == 0:
+        out.info["confirmed"] = {"order": finer.order, "clusters": 0, "replaced": 0, "confirmed": 0}
         return out
     fine = lattice_exponents(system, finer, near=centres)
     fields = (
