@@ -395,3 +395,20 @@ def test_unresolved_real_exponents_on_the_finer_lattice() -> None:
     ref = _monodromy_max_real_matrix(system)
     assert lat.stable and ref < 0
     assert lat.max_real == pytest.approx(ref, rel=1e-5)
+
+
+def test_auto_takes_the_lattice_when_the_dense_grid_cannot_decide() -> None:
+    """The example rotor at 800 rpm: its bending modes are damped by 0.02 1/s only, and the
+    default dense grid -8..8 leaves the verdict undecided; ``floquet(system)`` then takes the
+    lattice, which decides, with the leading exponent of a converged dense grid -16..16."""
+    from rheolin.data import example_path
+    from rheolin.io import load_model
+
+    system = load_model(example_path("rotor")).assemble(800 * np.pi / 30).system
+    assert not rl.floquet(system, method="dense").decided
+    res = rl.floquet(system)
+    wide = rl.floquet(system, 16, method="dense")
+    assert wide.converged and wide.decided and wide.stable
+    assert res.method == "lattice" and res.decided and res.stable
+    assert "dense Hill grid" in res.info["note"]
+    assert res.max_real == pytest.approx(wide.max_real, rel=1e-6)

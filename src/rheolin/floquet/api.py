@@ -74,7 +74,8 @@ def floquet(
     harmonics
         The truncation. ``None`` (default) chooses: the time-averaged eigenproblem for a
         time-invariant system; the dense grid of :func:`dense_stability_harmonics` when its
-        Hill matrix is small; else the lattice of :func:`~rheolin.lattice.system_lattice`.
+        Hill matrix is small (and, when that grid leaves the verdict undecided, the lattice
+        method if it decides); else the lattice of :func:`~rheolin.lattice.system_lattice`.
         An int ``N`` means ``-N..N``; a :class:`~rheolin.lattice.Lattice` selects the lattice
         method. The dense and sparse methods accept only dense grids (multiples of one
         step), because their representatives and truncation test assume one.
@@ -154,6 +155,24 @@ def floquet(
         hset = as_harmonic_set(harmonics)
     _require_grid(hset)
     size = 2 * system.n * len(hset)
+    if method == "auto" and harmonics is None and size <= AUTO_DENSE_LIMIT:
+        res = floquet(system, hset, method="dense", memory_budget=budget)
+        if res.decided:
+            return res
+        # the dense grid could not decide (a truncation that has not converged near the
+        # axis): the lattice raises its order where the exponents need it
+        try:
+            lat = _lattice_auto(system, None, budget, refine=True)
+        except MemoryBudgetError:
+            return res
+        if lat.decided:
+            why = (
+                f"the dense Hill grid -{hset.indices.max()}..{hset.indices.max()} left the "
+                "verdict undecided; the lattice method decided it"
+            )
+            lat.info["note"] = f"{lat.info['note']}; {why}" if lat.info.get("note") else why
+            return lat
+        return res
     if method == "auto":
         method = "dense" if size <= AUTO_DENSE_LIMIT else "sparse"
     if method == "dense":
