@@ -85,7 +85,12 @@ def _stability_detail(s: dict[str, Any]) -> str:
     if s.get("floquet_lattice_order") is not None:
         how += f" of order {s['floquet_lattice_order']}, {s['floquet_lattice_size']} harmonics"
     if s.get("stability_decided") is not None:
-        how += ", decided" if s["stability_decided"] else ", UNDECIDED (truncation too coarse)"
+        if not s["stability_decided"]:
+            how += ", UNDECIDED (truncation too coarse)"
+        elif s["max_floquet_real"] > 0 and s.get("stability") != "unstable":
+            how += ", marginal (an undamped motion: real part zero within its tolerance)"
+        else:
+            how += ", decided"
     lead = f"largest Floquet real part {s['max_floquet_real']:.4g} 1/s"
     if s.get("leading_exponent_frequency_hz") is not None:
         lead += f" at {s['leading_exponent_frequency_hz']:.5g} Hz"

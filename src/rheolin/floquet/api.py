@@ -15,6 +15,7 @@ from ..budget import MemoryBudgetError, format_bytes
 from ..budget import memory_budget as resolve_budget
 from ..harmonics import HarmonicSet, as_harmonic_set
 from ..lattice import Lattice, harmonic_lattice, system_lattice
+from ..rigid_modes import find_rigid_modes
 from ..system import PeriodicSystem
 from .averaged import lattice_memory
 from .confirm import confirm_unresolved
@@ -65,7 +66,10 @@ def floquet(
     ``i h w1``; the representative kept is the eigenvalue whose eigenvector is centred on
     harmonic 0. The pencil is balanced first (:func:`~rheolin.hill.state_scaling`) and every
     exponent carries its own tolerance from its condition number, so stiff springs next to
-    soft ones, rigid-body modes and undamped modes do not turn into false instabilities.
+    soft ones and undamped modes do not turn into false instabilities. Rigid-body modes (free
+    motions with mass, e.g. an unsupported torsion) are constrained first
+    (:mod:`rheolin.rigid_modes`, said in ``info["note"]``): their double zero exponent is a
+    Jordan block that round-off would split into a false ``+-sqrt(eps)`` pair.
 
     Parameters
     ----------
@@ -123,6 +127,17 @@ def floquet(
     allowed = ("auto", "dense", "sparse", "lattice")
     if method not in allowed:
         raise ValueError(f"`method` must be one of {list(allowed)}, got {method!r}")
+    rigid = find_rigid_modes(system)
+    if rigid is not None:  # their zero exponents are a Jordan block: held, not analysed
+        res = floquet(
+            rigid.reduce(system), harmonics, method=method, order=order,
+            frequencies=frequencies, k=k, max_shifts=max_shifts, memory_budget=memory_budget,
+            near=near,
+        )  # fmt: skip
+        note = rigid.note(system)
+        res.info["note"] = f"{note}; {res.info['note']}" if res.info.get("note") else note
+        res.info["rigid_modes"] = rigid.count
+        return res
     budget = memory_budget
     if isinstance(harmonics, Lattice):
         if method not in ("auto", "lattice"):

@@ -109,6 +109,12 @@ def solve_point(
         x0=x0,
         backend=backend,
     )
+    dominant = sol.info.get("rigid_dominant_dofs")
+    if dominant:  # name the free motions by their body and component: "rotor uz, rotor phiz"
+        names = ", ".join(f"{b} {c}" for b, _, c in (a.dof_labels[j] for j in dominant))
+        sol.message = sol.message.replace(
+            "(free motion with mass", f"({names}: free motion with mass", 1
+        )
     res = sol.floquet
     if res is not None and not res.stable and res.method == "lattice":
         from ..stability.mechanism import identify

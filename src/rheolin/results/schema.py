@@ -33,10 +33,15 @@ def point_verdict(summary: dict[str, Any]) -> Verdict:
     'stability is UNDECIDED'
     """
     notes = []
-    if summary.get("stability") == "undecided" or summary.get("stability_decided") is False:
+    if summary.get("stability_decided") is False:
         notes.append(
             "stability is UNDECIDED: the Floquet truncation could still flip the verdict "
             "(docs/stability.md)"
+        )
+    elif summary.get("stability") == "undecided":
+        notes.append(
+            "stability is UNDECIDED: the largest Floquet real part is zero within its "
+            "tolerance (an undamped motion; add its damping to decide; docs/stability.md)"
         )
     notes += [str(w) for w in summary.get("warnings", [])]
     return Verdict(bool(summary.get("success")), notes)

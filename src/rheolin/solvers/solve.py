@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
@@ -12,6 +13,8 @@ from ..budget import format_bytes, memory_budget
 from ..floquet import dense_stability_harmonics, floquet, floquet_memory
 from ..harmonics import HarmonicSet, as_harmonic_set
 from ..operator import HarmonicBalance, SingularBlockError
+from ..rigid_modes import DENSE_LIMIT as RIGID_DENSE_LIMIT
+from ..rigid_modes import RigidModes, find_rigid_modes
 from ..solution import Solution
 from ..system import PeriodicSystem
 from . import direct, krylov, lti, perturbation, transient  # noqa: F401  (register the methods)
@@ -127,6 +130,16 @@ def solve(
     allowed = ["auto", *METHODS]
     if method not in allowed:
         raise ValueError(f"`method` must be one of {allowed}, got {method!r}")
+    again = dict(
+        method=method, rtol=rtol, maxiter=maxiter, callback=callback, workers=workers,
+        stability=stability, options=options, backend=backend, sparse_backend=sparse_backend,
+        memory_budget=memory_budget,
+    )  # fmt: skip
+    # rigid-body modes: found up front on models small enough for one dense eigensolve;
+    # larger ones only once harmonic 0 turns out singular
+    rigid = find_rigid_modes(system) if system.n <= RIGID_DENSE_LIMIT else None
+    if rigid is not None:
+        return _constrained(system, rigid, hset, x0, again)
     opts = Options(rtol=float(rtol), maxiter=maxiter, callback=callback, extra=dict(options or {}))
     op = HarmonicBalance(
         system,
@@ -138,7 +151,33 @@ def solve(
     )
     opts.x0 = _initial_guess(op, x0)
     sol = _auto(op, opts) if method == "auto" else _finish(op, _run(method, op, opts), opts)
+    if not sol.success and sol.info.get("singular_harmonic") == 0:
+        rigid = find_rigid_modes(system)
+        if rigid is not None:
+            return _constrained(system, rigid, hset, x0, again)
     return _check_stability(system, sol, stability)
+
+
+def _constrained(
+    system: PeriodicSystem,
+    rigid: RigidModes,
+    hset: HarmonicSet,
+    x0: Solution | np.ndarray | None,
+    kwargs: dict[str, Any],
+) -> Solution:
+    """Solve with the rigid-body modes held (:mod:`rheolin.rigid_modes`); the result is on
+    every DOF of ``system``."""
+    if isinstance(x0, Solution):
+        x0 = dataclasses.replace(x0, q=rigid.restrict(x0.q))
+    elif x0 is not None:
+        x0 = rigid.restrict(np.asarray(x0))
+    sol = solve(rigid.reduce(system), hset, x0=x0, **kwargs)
+    sol.q = rigid.expand(sol.q)
+    sol.message = f"{rigid.note(system)}; {sol.message}"
+    sol.info["rigid_modes"] = rigid.count
+    sol.info["rigid_dominant_dofs"] = rigid.dominant_dofs(system)
+    sol.info["rigid_mean_load"] = [float(x) for x in rigid.mean_load(system)]
+    return sol
 
 
 def _initial_guess(op: HarmonicBalance, x0: Solution | np.ndarray | None) -> np.ndarray | None:
@@ -209,14 +248,17 @@ def _run(method: str, op: HarmonicBalance, opts: Options) -> SolverOutcome:
     try:
         return METHODS[method](op, opts)
     except SingularBlockError as exc:
-        return SolverOutcome(
+        out = SolverOutcome(
             np.zeros_like(op.rhs),
             False,
             3,
             f"{exc}: the time-averaged system is singular at harmonic {exc.n} "
-            "(an undamped resonance); a preconditioned method cannot run",
+            f"({'a free motion or ' if exc.n == 0 else ''}an undamped resonance); a "
+            "preconditioned method cannot run",
             method,
         )
+        out.info["singular_harmonic"] = int(exc.n)
+        return out
 
 
 def _finish(op: HarmonicBalance, out: SolverOutcome, opts: Options, note: str = "") -> Solution:

@@ -1,0 +1,247 @@
+"""Rigid-body modes of a periodic system: found, and constrained.
+
+A model with a free axial or torsional motion (a ROSS-style rotor on radial bearings only, a
+gear train without a drive stiffness) has a mean stiffness ``K_0`` with a null space that
+carries mass: its rigid-body modes ``R`` (``K_0 R = 0``, ``R^T M_0 R = I``). At harmonic 0
+the time-averaged block ``A0(0) = K_0`` is then singular, and Floquet analysis sees a double
+exponent at zero (a Jordan block) that round-off splits into a false pair ``+-sqrt(eps)``.
+
+A steady operating point at a given speed presumes that something holds these motions: the
+drive holds the speed, a thrust bearing the axial position. :func:`find_rigid_modes` finds
+the modes and :class:`RigidModes` imposes that: ``R^T M_0 q(t) = 0`` at every instant (the
+constant-speed assumption of rotordynamics), by eliminating one DOF per mode,
+``q = T y``, and projecting the equations with ``T^T`` (the constraint force ``M_0 R lambda``
+drops out because ``T^T M_0 R = 0``). The elastic modes of the free system are ``M_0``-
+orthogonal to ``R``, so they are kept exactly. The mean load on a rigid mode, ``R^T f_0``,
+is what the constraint takes (the drive torque, the thrust): it is reported.
+
+>>> import numpy as np
+>>> M = np.diag([1.0, 1.0]); K = np.array([[1.0, -1.0], [-1.0, 1.0]])  # two masses, one spring
+>>> s = PeriodicSystem(1.0, M={0: M}, K={0: K}, f={1: np.array([1.0, 0.0])})
+>>> rigid = find_rigid_modes(s)
+>>> rigid.count, np.round(rigid.modes.ravel() * np.sqrt(2), 12).tolist()
+(1, [1.0, 1.0])
+>>> r = rigid.reduce(s); r.n, r.coefficient("K", 0).tolist()  # the elastic mode: k_eff = 2 k
+(1, [[4.0]])
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .system import PeriodicSystem
+
+__all__ = ["DENSE_LIMIT", "RIGID_TOL", "RigidModes", "find_rigid_modes"]
+
+#: A mode is rigid when its eigenvalue of the mass-scaled mean stiffness is below this
+#: fraction of the largest (round-off of an assembled stiffness is ~1e-15; a legitimately
+#: soft mode, e.g. a 1e3 N/m spring under a 1e13 N/m tie, is ~1e-10).
+RIGID_TOL = 1e-12
+#: Up to this size the search is one dense symmetric eigendecomposition; above, shift-invert
+#: Lanczos near zero.
+DENSE_LIMIT = 2000
+#: Lanczos: how many eigenvalues nearest zero are looked at (more rigid modes than this are
+#: refused with a message).
+_SPARSE_K = 12
+
+
+def _dense(x: Any) -> np.ndarray:
+    return x.toarray() if sp.issparse(x) else np.asarray(x)
+
+
+@dataclass
+class RigidModes:
+    """Rigid-body modes ``R`` (``n x k``, ``R^T M_0 R = I``) and the constraint that holds them.
+
+    ``pivots`` are the eliminated DOFs (one per mode, where no time-varying coefficient acts
+    when possible), ``keep`` the others; ``q[keep] = y`` and ``q[pivots] = G y``.
+    """
+
+    modes: np.ndarray
+    pivots: np.ndarray
+    keep: np.ndarray
+    G: np.ndarray
+    n: int
+
+    @property
+    def count(self) -> int:
+        return int(self.modes.shape[1])
+
+    def transform(self) -> sp.csr_array:
+        """``T`` (``n x (n - k)``) with ``q = T y``."""
+        m = self.keep.size
+        rows = [self.keep, np.repeat(self.pivots, m)]
+        cols = [np.arange(m), np.tile(np.arange(m), self.pivots.size)]
+        vals = [np.ones(m), self.G.ravel()]
+        T = sp.coo_array(
+            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), (self.n, m)
+        ).tocsr()
+        T.eliminate_zeros()
+        return T
+
+    def reduce(self, system: PeriodicSystem) -> PeriodicSystem:
+        """The constrained system ``T^T X(t) T``, ``T^T f(t)`` (same format, sparse or dense)."""
+        if system.n != self.n:
+            raise ValueError(f"the system has {system.n} DOFs, the rigid modes {self.n}")
+        T = self.transform()
+        Tt = T.T.tocsr()
+
+        def project(X: Any) -> Any:
+            if sp.issparse(X):
+                return sp.csc_array(Tt @ sp.csr_array(X) @ T)
+            return np.asarray(Tt @ np.asarray(Tt @ np.asarray(X).T).T)
+
+        coeffs = {
+            name: {k: project(X) for k, X in getattr(system, name).items()}
+            for name in ("M", "D", "K")
+        }
+        loads = {k: Tt @ np.asarray(v) for k, v in system.f.items()}
+        return PeriodicSystem(system.omega, f=loads, **coeffs)
+
+    def expand(self, Y: np.ndarray) -> np.ndarray:
+        """``q = T y`` along the last axis (coefficients ``(..., n - k) -> (..., n)``)."""
+        Y = np.asarray(Y)
+        out = np.zeros((*Y.shape[:-1], self.n), dtype=np.result_type(Y.dtype, float))
+        out[..., self.keep] = Y
+        out[..., self.pivots] = Y @ self.G.T
+        return out
+
+    def restrict(self, Q: np.ndarray) -> np.ndarray:
+        """``y = q[keep]`` (e.g. a warm start of the full system for the constrained one)."""
+        return np.asarray(Q)[..., self.keep]
+
+    def mean_load(self, system: PeriodicSystem) -> np.ndarray:
+        """``R^T f_0`` per mode: the mean load the constraint takes (the drive, the thrust)."""
+        return self.modes.T @ np.real(system.load(0))
+
+    def dominant_dofs(self, system: PeriodicSystem) -> list[int]:
+        """Per mode, the DOF with the largest mass-weighted amplitude (to name the motion)."""
+        m = (
+            np.abs(_dense(system.coefficient("M", 0)).diagonal())
+            if self.n <= DENSE_LIMIT
+            else (np.abs(sp.csr_array(system.coefficient("M", 0)).diagonal()))
+        )
+        return [int(np.argmax(np.abs(r) * np.sqrt(m))) for r in self.modes.T]
+
+    def note(self, system: PeriodicSystem) -> str:
+        """One sentence for ``Solution.message`` / ``FloquetResult.info['note']``."""
+        load = self.mean_load(system)
+        k = self.count
+        text = (
+            f"{k} rigid-body mode{'s' if k > 1 else ''} (free motion with mass: K_0 is singular) "
+            f"constrained: R^T M_0 q = 0 at every instant (the drive holds the speed, a thrust "
+            "bearing the axial position; docs/solvers.md)"
+        )
+        if np.abs(load).max(initial=0.0) > 0.0:
+            text += (
+                f"; the constraint takes the mean load on {'them' if k > 1 else 'it'}, "
+                f"R^T f_0 = {', '.join(f'{x:.3g}' for x in load)}"
+            )
+        return text
+
+
+def _varying_dofs(system: PeriodicSystem) -> np.ndarray:
+    """DOFs a time-varying coefficient touches (rows or columns)."""
+    touched = np.zeros(system.n, bool)
+    for name in ("M", "D", "K"):
+        for k, X in getattr(system, name).items():
+            if k == 0:
+                continue
+            c = sp.coo_array(X) if sp.issparse(X) else sp.coo_array(np.asarray(X))
+            touched[c.row] = True
+            touched[c.col] = True
+    return touched
+
+
+def _candidates(Ks: Any, n: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """Eigenpairs of the symmetric part of the mass-scaled stiffness nearest zero, and its
+    largest eigenvalue magnitude."""
+    if n <= DENSE_LIMIT:
+        A = _dense(Ks)
+        lam, V = np.linalg.eigh(0.5 * (A + A.T))
+        return lam, V, float(np.abs(lam).max(initial=0.0))
+    S = sp.csc_array(0.5 * (Ks + Ks.T))
+    scale = float(abs(S).sum(axis=1).max())  # Gershgorin bound of the largest eigenvalue
+    if scale == 0.0:
+        return np.zeros(0), np.zeros((n, 0)), 0.0
+    shift = -1e-8 * scale  # nonsingular, and nearest to the rigid modes
+    lam, V = spla.eigsh(S, k=min(_SPARSE_K, n - 2), sigma=shift, which="LM", tol=1e-12)
+    return lam, V, scale
+
+
+def find_rigid_modes(system: PeriodicSystem) -> RigidModes | None:
+    """The rigid-body modes of ``system`` and their constraint, or None when it has none.
+
+    A rigid-body mode is a null vector of the mean stiffness ``K_0`` that carries mass
+    (``r^T M_0 r > 0``). Massless null vectors (a free massless DOF) are a singular model, not a
+    rigid body: they are left to the solvers, which refuse them.
+    """
+    M0, K0 = system.coefficient("M", 0), system.coefficient("K", 0)
+    n = system.n
+    if M0 is None or K0 is None or n < 2:
+        return None
+    sparse = sp.issparse(M0) or sp.issparse(K0)
+    d = np.abs(sp.csr_array(M0).diagonal() if sp.issparse(M0) else np.diag(M0))
+    if d.max(initial=0.0) <= 0.0:
+        return None
+    d = np.maximum(d, 1e-12 * d.max())
+    s = 1.0 / np.sqrt(d)
+    if sparse:
+        Ds = sp.diags_array(s)
+        Ks = sp.csr_array(Ds @ sp.csr_array(K0) @ Ds)
+    else:
+        Ks = s[:, None] * np.asarray(K0, float) * s[None, :]
+    lam, V, scale = _candidates(Ks, n)
+    if scale == 0.0:
+        return None
+    small = np.abs(lam) <= RIGID_TOL * scale
+    if not small.any():
+        return None
+    if n > DENSE_LIMIT and small.all():
+        raise ValueError(
+            f"the model has at least {small.size} rigid-body modes (free motions with mass): "
+            "support the bodies (bearings with axial and torsional components, a drive "
+            "stiffness) so that each has at most a few free motions"
+        )
+    Vs = V[:, small]
+    # null vectors of the symmetric part must also be null vectors of K_0 (a circulatory
+    # stiffness has a null symmetric part and is not singular)
+    res = np.abs(Ks @ Vs).max(axis=0)
+    Vs = Vs[:, res <= 1e3 * RIGID_TOL * scale]
+    if Vs.shape[1] == 0:
+        return None
+    R = s[:, None] * Vs
+    Md = M0 if sparse else np.asarray(M0, float)
+    mass = np.einsum("ij,ij->j", R, np.asarray(Md @ R))
+    R = R[:, mass > 1e-9 * np.abs(mass).max(initial=0.0)]
+    if R.shape[1] == 0:
+        return None
+    L = sla.cholesky(R.T @ np.asarray(Md @ R), lower=True)
+    R = sla.solve_triangular(L, R.T, lower=True).T  # M_0-orthonormal
+    R *= np.sign(R[np.argmax(np.abs(R), axis=0), np.arange(R.shape[1])])  # a fixed sign
+    C = np.asarray(Md @ R)  # constraint C^T q = 0
+    k = R.shape[1]
+    varying = _varying_dofs(system)
+    pivots = None
+    for pool in (np.flatnonzero(~varying), np.arange(n)):
+        if pool.size < k:
+            continue
+        Cp = C[pool] * s[pool][:, None]  # in mass-scaled units: a scale-free choice
+        _, _, piv = sla.qr(Cp.T, pivoting=True, mode="economic")
+        chosen = pool[piv[:k]]
+        if np.linalg.matrix_rank(C[chosen]) == k:
+            pivots = np.sort(chosen)
+            break
+    if pivots is None:
+        return None
+    keep = np.setdiff1d(np.arange(n), pivots)
+    # C_P^T q_P + C_O^T q_O = 0  ->  q_P = G q_O
+    G = -np.linalg.solve(C[pivots].T, C[keep].T)
+    G[np.abs(G) <= 1e-14 * np.abs(G).max(initial=0.0)] = 0.0
+    return RigidModes(R, pivots, keep, G, n)

@@ -1,0 +1,146 @@
+"""Rigid-body modes (free motion with mass) are found and held, not solved into a singular
+harmonic 0 or a false Floquet instability: against the relative-coordinate equation of a
+free two-inertia drive (time integration, monodromy), the free-free chain's closed-form
+frequencies, and ROSS's unbalance response of its own rotor with free axial and torsion."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import rheolin as rl
+from rheolin.rigid_modes import find_rigid_modes
+
+J1, J2, K0, EPS, C, W = 2.0, 3.0, 4.0e4, 0.3, 6.0, 90.0
+T_MEAN, T_DYN = 5.0, 2.0  # on inertia 1: a mean torque (taken by the drive) and a 1x one
+
+
+def _two_inertia() -> rl.PeriodicSystem:
+    """Two inertias coupled by a mesh stiffness ``K0 (1 + EPS cos W t)`` and a damper, no
+    drive stiffness: the torsion of the pair is free."""
+    S = np.array([[1.0, -1.0], [-1.0, 1.0]])
+    return rl.PeriodicSystem(
+        W,
+        M={0: np.diag([J1, J2])},
+        D={0: C * S},
+        K={0: K0 * S, 1: 0.5 * EPS * K0 * S},
+        f={0: np.array([T_MEAN, 0.0]), 1: np.array([0.5 * T_DYN, 0.0])},
+    )
+
+
+def _relative(t, y):
+    """``Je x'' + C x' + K0 (1 + EPS cos W t) x = J2 T1(t) / (J1 + J2)``, ``x = th1 - th2``:
+    the free pair held at ``J1 th1 + J2 th2 = 0`` (the drive takes the mean motion)."""
+    je = J1 * J2 / (J1 + J2)
+    torque = J2 * (T_MEAN + T_DYN * np.cos(W * t)) / (J1 + J2)
+    x, v = y
+    return [v, (torque - C * v - K0 * (1 + EPS * np.cos(W * t)) * x) / je]
+
+
+def test_free_two_inertia_drive_is_held_and_matches_its_relative_coordinate():
+    s = _two_inertia()
+    rigid = find_rigid_modes(s)
+    assert rigid is not None and rigid.count == 1
+    assert np.allclose(rigid.modes[:, 0], 1 / np.sqrt(J1 + J2), rtol=1e-12)
+    sol = rl.solve(s, 14)
+    assert sol.success and sol.info["rigid_modes"] == 1, sol.message
+    assert "rigid-body mode" in sol.message
+    # the constraint takes the mean torque: R^T f_0
+    assert np.isclose(sol.info["rigid_mean_load"][0], T_MEAN / np.sqrt(J1 + J2), rtol=1e-12)
+    period = 2 * np.pi / W
+    decay = (J1 * J2 / (J1 + J2)) / C * 2  # 1 / (C / 2 Je)
+    t_end = np.ceil(40 * decay / period) * period
+    t = t_end + np.linspace(0, period, 41)
+    ivp = solve_ivp(_relative, (0, t[-1]), [0, 0], method="DOP853", rtol=1e-11, atol=1e-16,
+                    t_eval=t)  # fmt: skip
+    x = ivp.y[0]
+    q = sol.time_response(t) if hasattr(sol, "time_response") else None
+    if q is None:
+        E = np.exp(1j * np.outer(t, sol.harmonics) * W)
+        q = np.real(E @ sol.q)
+    assert np.abs((q[:, 0] - q[:, 1]) - x).max() < 1e-7 * np.abs(x).max()
+    # the held motion: J1 th1 + J2 th2 = 0, so th1 = J2 x / (J1 + J2)
+    assert np.abs(q[:, 0] - J2 * x / (J1 + J2)).max() < 1e-7 * np.abs(x).max()
+
+
+def test_free_two_inertia_floquet_is_the_relative_coordinate_monodromy_not_a_false_pair():
+    """Without the constraint the double zero exponent splits into +-sqrt(eps) by round-off,
+    read as an instability. Held, the exponents are those of the relative coordinate."""
+    res = rl.floquet(_two_inertia())
+    assert res.info.get("rigid_modes") == 1 and "rigid-body mode" in res.info["note"]
+    period = 2 * np.pi / W
+    cols = []
+    for y0 in ([1.0, 0.0], [0.0, 1.0]):
+        out = solve_ivp(lambda t, y: np.subtract(_relative(t, y), _relative(t, [0, 0])),
+                        (0, period), y0, method="DOP853", rtol=1e-12, atol=1e-14)  # fmt: skip
+        cols.append(out.y[:, -1])
+    mu = np.linalg.eigvals(np.column_stack(cols))
+    expected = np.log(np.abs(mu)).max() / period
+    assert res.stable and res.decided
+    assert abs(res.max_real - expected) < 1e-6 * abs(expected), (res.max_real, expected)
+
+
+def test_free_free_chain_keeps_its_closed_form_elastic_frequencies():
+    """N equal masses and springs, both ends free: w_j = 2 sqrt(k/m) sin(j pi / 2N),
+    j = 1..N-1, and the rigid translation (j = 0) held."""
+    n, k, m = 12, 3.0e5, 1.5
+    K = np.zeros((n, n))
+    for i in range(n - 1):
+        K[i : i + 2, i : i + 2] += k * np.array([[1, -1], [-1, 1]])
+    beta = 1e-6  # proportional damping D = beta K: lambda = -beta w^2 / 2 +- i w sqrt(1 - z^2)
+    s = rl.PeriodicSystem(2000.0, M={0: m * np.eye(n)}, D={0: beta * K}, K={0: K})
+    res = rl.floquet(s)
+    assert res.info["rigid_modes"] == 1
+    lam = res.exponents[res.exponents.imag > 0]
+    lam = lam[np.argsort(lam.imag)]
+    w = 2 * np.sqrt(k / m) * np.sin(np.arange(1, n) * np.pi / (2 * n))
+    zeta = beta * w / 2
+    assert lam.size == n - 1
+    assert np.allclose(lam.imag, w * np.sqrt(1 - zeta**2), rtol=1e-10)
+    assert np.allclose(lam.real, -zeta * w, rtol=1e-8)
+    assert res.stable and res.decided
+
+
+def test_massless_free_dof_is_not_a_rigid_body():
+    """A null vector without mass is a singular model: not held, left to the solver."""
+    K = np.array([[2.0, -1.0, 0.0], [-1.0, 1.0, 0.0], [0.0, 0.0, 0.0]])
+    s = rl.PeriodicSystem(5.0, M={0: np.diag([1.0, 1.0, 0.0])}, K={0: K},
+                          f={1: np.array([1.0, 0.0, 0.0])})  # fmt: skip
+    assert find_rigid_modes(s) is None
+
+
+@pytest.fixture(scope="module")
+def ross():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return pytest.importorskip("ross")
+
+
+def test_ross_rotor_with_free_axial_and_torsion_and_an_unbalanced_disk_matches_ross(ross):
+    """ROSS's rotor_example has no axial or torsional support. With an unbalance on its disk
+    it used to fail at every speed ("singular at harmonic 0"); held, the lateral response
+    equals ROSS's unbalance response (ROSS applies the unbalance as a force: the eccentric
+    disk's own rheo-linear terms differ at second order in the eccentricity)."""
+    from rheolin.io.ross import model_from_ross
+    from rheolin.results.compute import solve_point
+
+    rotor = ross.rotor_example()
+    model = model_from_ross(rotor)
+    node, u, phase = 2, 1e-4, 0.3
+    model.add_disk(model.bodies and next(iter(model.bodies)), node, unbalance=u,
+                   unbalance_angle=phase)  # fmt: skip
+    speeds = np.array([150.0, 400.0, 700.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        X = np.asarray(rotor.run_unbalance_response([node], [u], [phase], speeds).forced_resp)
+    for i, w in enumerate(speeds):
+        p = solve_point(model, float(w), order=2, stability=False)
+        sol = p.solution
+        assert sol.success and sol.info["rigid_modes"] >= 1, sol.message
+        q1 = sol.q[list(sol.harmonics).index(1)]
+        got = 2 * q1[6 * node : 6 * node + 2]
+        want = X[6 * node : 6 * node + 2, i]
+        assert np.abs(got - want).max() < 1e-6 * np.abs(want).max(), (w, got, want)
