@@ -43,7 +43,9 @@ def build(kind: str, target: int) -> sp.csc_array:
 
         nodes = max(2, target // 6)
         m = Model()
-        m.add_shaft("s", np.linspace(0.0, 0.002 * nodes, nodes), outer_diameter=0.05)
+        m.add_shaft(
+            "s", np.linspace(0.0, 0.002 * nodes, nodes), outer_diameter=0.05, material="steel"
+        )
         m.add_bearing("a", "s", 0, 1e8, 0.0, components=None)
         a = m.assemble(100.0)
         K, M = a.system.K[0], a.system.M[0]

@@ -39,13 +39,17 @@ from .system import PeriodicSystem
 
 __all__ = ["DENSE_LIMIT", "RIGID_TOL", "RigidModes", "find_rigid_modes"]
 
-#: A mode is rigid when its eigenvalue of the mass-scaled mean stiffness is below this
-#: fraction of the largest (round-off of an assembled stiffness is ~1e-15; a legitimately
-#: soft mode, e.g. a 1e3 N/m spring under a 1e13 N/m tie, is ~1e-10).
-RIGID_TOL = 1e-12
+#: A vector ``v`` is a rigid-body mode when ``||K v|| <= RIGID_TOL || |K| |v| ||`` (mass-scaled
+#: ``K``): its stiffness forces cancel to round-off (~1e-15 once refined), while a body on a
+#: soft support keeps the support's force (a 1e3 N/m spring under a 1e9 N/m body: ~1e-6).
+#: A local test: next to a 1e12 N/m support, eigenvalues carry an absolute error of
+#: ``eps x 1e12`` and cannot tell a soft spring from none.
+RIGID_TOL = 1e-11
+#: Eigenvalues up to this fraction of the largest are candidates (eigh's absolute accuracy).
+_CANDIDATE = 1e-8
 #: Up to this size the search is one dense symmetric eigendecomposition; above, shift-invert
 #: Lanczos near zero.
-DENSE_LIMIT = 2000
+DENSE_LIMIT = 1000
 #: Lanczos: how many eigenvalues nearest zero are looked at (more rigid modes than this are
 #: refused with a message).
 _SPARSE_K = 12
@@ -175,6 +179,25 @@ def _candidates(Ks: Any, n: int) -> tuple[np.ndarray, np.ndarray, float]:
     return lam, V, scale
 
 
+def _refined(Ks: Any, V: np.ndarray, scale: float, sparse: bool) -> np.ndarray:
+    """Two steps of inverse iteration near zero, then Rayleigh-Ritz: null vectors accurate
+    to round-off of the local stiffness, whatever the stiffest part of the model."""
+    n = V.shape[0]
+    shift = 1e-9 * scale
+    if sparse:
+        lu = spla.splu(sp.csc_array(Ks + shift * sp.eye_array(n)))
+        solve = lu.solve
+    else:
+        f = sla.lu_factor(np.asarray(Ks) + shift * np.eye(n))
+        solve = lambda b: sla.lu_solve(f, b)  # noqa: E731
+    X = V
+    for _ in range(2):
+        X, _r = np.linalg.qr(solve(X))
+    H = X.T @ np.asarray(Ks @ X)
+    _, Y = np.linalg.eigh(0.5 * (H + H.T))
+    return X @ Y
+
+
 def find_rigid_modes(system: PeriodicSystem) -> RigidModes | None:
     """The rigid-body modes of ``system`` and their constraint, or None when it has none.
 
@@ -200,7 +223,7 @@ def find_rigid_modes(system: PeriodicSystem) -> RigidModes | None:
     lam, V, scale = _candidates(Ks, n)
     if scale == 0.0:
         return None
-    small = np.abs(lam) <= RIGID_TOL * scale
+    small = np.abs(lam) <= _CANDIDATE * scale
     if not small.any():
         return None
     if n > DENSE_LIMIT and small.all():
@@ -209,11 +232,14 @@ def find_rigid_modes(system: PeriodicSystem) -> RigidModes | None:
             "support the bodies (bearings with axial and torsional components, a drive "
             "stiffness) so that each has at most a few free motions"
         )
-    Vs = V[:, small]
-    # null vectors of the symmetric part must also be null vectors of K_0 (a circulatory
-    # stiffness has a null symmetric part and is not singular)
-    res = np.abs(Ks @ Vs).max(axis=0)
-    Vs = Vs[:, res <= 1e3 * RIGID_TOL * scale]
+    Vs = _refined(Ks, V[:, small], scale, sparse)
+    # the local test: stiffness forces that cancel to round-off (a null vector of K_0 itself,
+    # not only of its symmetric part: a circulatory stiffness is not singular)
+    absK = abs(Ks) if sparse else np.abs(Ks)
+    num = np.linalg.norm(np.asarray(Ks @ Vs), axis=0)
+    den = np.linalg.norm(np.asarray(absK @ np.abs(Vs)), axis=0)
+    rigid = num <= RIGID_TOL * den
+    Vs = Vs[:, rigid]
     if Vs.shape[1] == 0:
         return None
     R = s[:, None] * Vs
@@ -229,16 +255,24 @@ def find_rigid_modes(system: PeriodicSystem) -> RigidModes | None:
     k = R.shape[1]
     varying = _varying_dofs(system)
     pivots = None
-    for pool in (np.flatnonzero(~varying), np.arange(n)):
-        if pool.size < k:
-            continue
-        Cp = C[pool] * s[pool][:, None]  # in mass-scaled units: a scale-free choice
-        _, _, piv = sla.qr(Cp.T, pivoting=True, mode="economic")
-        chosen = pool[piv[:k]]
-        if np.linalg.matrix_rank(C[chosen]) == k:
-            pivots = np.sort(chosen)
-            break
-    if pivots is None:
+    Cs = C * s[:, None]  # in mass-scaled units: a scale-free choice
+
+    size = float(np.linalg.norm(Cs, 2))
+
+    def pick(pool: np.ndarray) -> tuple[np.ndarray, float]:
+        """Pivots by QR with column pivoting; their quality: the smallest singular value of
+        ``C[pivots]`` against ``||C||`` (1 at best; small means a large ``G``)."""
+        _, _, piv = sla.qr(Cs[pool].T, pivoting=True, mode="economic")
+        chosen = np.sort(pool[piv[:k]])
+        return chosen, float(np.linalg.svd(Cs[chosen], compute_uv=False).min()) / size
+
+    pivots, quality = pick(np.arange(n))  # the best-conditioned elimination
+    quiet = np.flatnonzero(~varying)  # preferred: no time-varying coefficient there
+    if quiet.size >= k and quiet.size < n:
+        alt, alt_quality = pick(quiet)
+        if alt_quality >= 0.1 * quality:
+            pivots, quality = alt, alt_quality
+    if not quality > 1e-8:
         return None
     keep = np.setdiff1d(np.arange(n), pivots)
     # C_P^T q_P + C_O^T q_O = 0  ->  q_P = G q_O

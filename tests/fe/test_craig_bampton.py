@@ -88,8 +88,9 @@ def _housing_model(body: CondensedFE) -> rl.Model:
         axis=(1, 0, 0),
         origin=(0.0, B / 2, H + 0.05),
         material_damping=1e-5,
+        material="steel",
     )
-    m.add_disk("shaft", 1, outer_diameter=0.2, width=0.03)
+    m.add_disk("shaft", 1, outer_diameter=0.2, width=0.03, material="steel")
     m.add_force("unbalance_y", "shaft", 1, force=(0, 100.0, 0), order=1)  # rotating load
     m.add_force("unbalance_z", "shaft", 1, force=(0, 0, 100.0), order=1, phase=-np.pi / 2)
     m.add_condensed_body("housing", body=body, speed_ratio=0)

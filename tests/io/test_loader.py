@@ -46,9 +46,11 @@ def test_every_example_loads_and_docs_example_is_the_gearbox(tmp_path):
 def _python_gearbox_stage() -> Model:
     """The same model as ``SMALL`` below, written with the Python API in SI units."""
     m = Model(input_body="a")
-    m.add_shaft("a", [0.0, 0.05, 0.1], outer_diameter=0.03)
-    m.add_shaft("b", [0.0, 0.05, 0.1], outer_diameter=0.04, origin=(0.06, 0.0, 0.0))
-    m.add_disk("a", 1, outer_diameter=0.044, width=0.02, unbalance=5e-6)
+    m.add_shaft("a", [0.0, 0.05, 0.1], outer_diameter=0.03, material="steel")
+    m.add_shaft(
+        "b", [0.0, 0.05, 0.1], outer_diameter=0.04, origin=(0.06, 0.0, 0.0), material="steel"
+    )
+    m.add_disk("a", 1, outer_diameter=0.044, width=0.02, unbalance=5e-6, material="steel")
     m.add_disk("b", 1, mass=0.7706, inertia=(3.4e-4, 3.4e-4, 6.17e-4), unbalance=1e-5)
     for body in ("a", "b"):
         m.add_bearing(

@@ -35,10 +35,10 @@ def _tables_model():
     m.add_shaft("s", [0.0, 0.2, 0.5, 0.7], outer_diameter=[0.05, 0.06, 0.05],
                 inner_diameter=0.01, outer_diameter_right=[0.05, 0.05, 0.05],
                 elastic_modulus=[2.1e11, 2.0e11, 2.1e11], poisson_ratio=[0.3, 0.29, 0.3],
-                material_damping=1e-5)  # fmt: skip
+                material_damping=1e-5, material="steel")  # fmt: skip
     m.add_shaft_layer("s", [1, 2], 0.09, 0.06, elastic_modulus=1e3, shear_modulus=400.0,
                       density=2700.0)  # fmt: skip
-    m.add_disk("s", 1, outer_diameter=0.3, width=0.04)
+    m.add_disk("s", 1, outer_diameter=0.3, width=0.04, material="steel")
     m.add_disk("s", 1, unbalance=2e-4, unbalance_angle=0.3, couple_unbalance=1e-5)
     m.add_bearing("a", "s", 0, [[[1e7, 2e6], [-1e6, 1.1e7]]] * 2 + [[[2e7, 3e6], [-2e6, 2e7]]],
                   [100.0, 120.0, 150.0], speeds=[50.0, 300.0, 900.0], mass=0.1,

@@ -20,8 +20,8 @@ CXX = [300.0, 250.0, 200.0, 180.0]
 
 def _rotor(interp="cubic", speeds=SPEEDS):
     m = Model()
-    m.add_shaft("s", [0.0, 0.3, 0.6], outer_diameter=0.04)
-    m.add_disk("s", 1, outer_diameter=0.25, width=0.04)
+    m.add_shaft("s", [0.0, 0.3, 0.6], outer_diameter=0.04, material="steel")
+    m.add_disk("s", 1, outer_diameter=0.25, width=0.04, material="steel")
     table = [[[k, q], [-q, k]] for k, q in zip(KXX, KXY, strict=True)]
     for name, node in (("a", 0), ("b", 2)):
         m.add_bearing(name, "s", node, table, CXX, speeds=speeds, interpolation=interp,
@@ -87,7 +87,7 @@ def test_bad_tables_name_the_field():
     with pytest.raises(ModelError, match="stiffness"):
         _rotor(speeds=SPEEDS[:3])
     m = Model()
-    m.add_shaft("s", [0.0, 0.3], outer_diameter=0.04)
+    m.add_shaft("s", [0.0, 0.3], outer_diameter=0.04, material="steel")
     with pytest.raises(ModelError, match="interpolation"):
         m.add_bearing("a", "s", 0, [1e6, 2e6], 0.0, speeds=[1.0, 2.0], interpolation="spline")
     with pytest.raises(ModelError, match="speeds"):

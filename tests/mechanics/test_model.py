@@ -56,6 +56,7 @@ def _asymmetric_rotor(I1, I2, E, L, m, c):
         section=general_section(1e-3, I1, I2, I1 + I2),
         elastic_modulus=E,
         density=0.0,
+        material="steel",
     )
     model.add_disk("rotor", 1, mass=m, inertia=(0.02, 0.02, 0.04))
     model.add_bearing("left", "rotor", 0, 1e11, components=("ux", "uy", "uz", "phiz"))
@@ -170,10 +171,10 @@ def test_geared_pair_with_unbalance_matches_time_integration():
 def test_model_errors_name_the_field():
     model = Model()
     with pytest.raises(ModelError, match="positions"):
-        model.add_shaft("s", [0.0, 0.0], outer_diameter=0.02)
-    model.add_shaft("s", [0.0, 0.5], outer_diameter=0.02)
+        model.add_shaft("s", [0.0, 0.0], outer_diameter=0.02, material="steel")
+    model.add_shaft("s", [0.0, 0.5], outer_diameter=0.02, material="steel")
     with pytest.raises(ModelError, match="name"):
-        model.add_shaft("s", [0.0, 0.5], outer_diameter=0.02)
+        model.add_shaft("s", [0.0, 0.5], outer_diameter=0.02, material="steel")
     with pytest.raises(ModelError, match="body"):
         model.add_disk("nope", 0, mass=1.0, inertia=(1, 1, 1))
     model.add_rigid_body("g", (0.01, 0, 0), 1.0, (1, 1, 1))

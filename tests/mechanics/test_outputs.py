@@ -60,7 +60,7 @@ def test_static_bearing_forces_carry_the_weight():
     model = Model()
     model.add_shaft(
         "rotor", [0.0, a_len, a_len + b_len], outer_diameter=0.05, elastic_modulus=2.1e11,
-        density=0.0,
+        density=0.0, material="steel"
     )  # fmt: skip
     model.add_disk("rotor", 1, mass=m, inertia=(0.05, 0.05, 0.08))
     model.add_bearing("left", "rotor", 0, 1e8, components=("ux", "uy", "uz", "phiz"))

@@ -37,8 +37,8 @@ def test_gyroscopic_shaft_matches_per_speed_solves_and_custom_loads():
     """A spinning Timoshenko shaft with a disk (gyroscopic, speed dependent): the batch equals
     ``rl.solve`` of each assembled speed; a load callable replaces the model's loads."""
     model = Model()
-    model.add_shaft("s", np.linspace(0, 0.9, 7), outer_diameter=0.04)
-    model.add_disk("s", 3, outer_diameter=0.25, width=0.04)
+    model.add_shaft("s", np.linspace(0, 0.9, 7), outer_diameter=0.04, material="steel")
+    model.add_disk("s", 3, outer_diameter=0.25, width=0.04, material="steel")
     model.add_bearing("a", "s", 0, 2e7, 300.0, components=("ux", "uy", "uz", "phiz"))
     model.add_bearing("b", "s", 6, 2e7, 300.0)
     model.add_force("f", "s", 3, force=(10.0, 0, 0), order=1)

@@ -15,6 +15,7 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator
 
+from ..mechanics.sections import MATERIALS
 from .units import UnitError, to_si
 
 __all__ = [
@@ -231,15 +232,6 @@ def _inertia_matrix(value: list[Any] | None, definite: bool = True) -> list[Any]
     return J.tolist()
 
 
-#: Materials a file may name instead of giving the constants (``material = "steel"``):
-#: elastic modulus [Pa], Poisson's ratio, density [kg/m^3]. Explicit keys override them.
-MATERIALS: dict[str, dict[str, float]] = {
-    "steel": {"elastic_modulus": 2.1e11, "poisson_ratio": 0.3, "density": 7850.0},
-    "stainless_steel": {"elastic_modulus": 1.93e11, "poisson_ratio": 0.29, "density": 8000.0},
-    "cast_iron": {"elastic_modulus": 1.1e11, "poisson_ratio": 0.26, "density": 7200.0},
-    "aluminium": {"elastic_modulus": 7.0e10, "poisson_ratio": 0.33, "density": 2700.0},
-    "titanium": {"elastic_modulus": 1.14e11, "poisson_ratio": 0.34, "density": 4430.0},
-}
 Material = Literal["steel", "stainless_steel", "cast_iron", "aluminium", "titanium"]
 
 

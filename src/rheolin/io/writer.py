@@ -76,7 +76,8 @@ def model_to_toml(model: Any, path: str | Path | None = None) -> str:
     --------
     >>> from rheolin.mechanics import Model
     >>> m = Model()
-    >>> m.add_shaft("s", [0.0, 0.5], outer_diameter=0.05, shear_modulus=80e9)
+    >>> m.add_shaft("s", [0.0, 0.5], outer_diameter=0.05, shear_modulus=80e9,
+    ...            material="steel")
     >>> m.add_bearing("b", "s", 0, 1e7)
     >>> text = model_to_toml(m)
     >>> "shear_modulus = 80000000000.0" in text, "[[shafts.bearings]]" in text

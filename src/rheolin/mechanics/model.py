@@ -40,7 +40,7 @@ from .joints import expand_matrix
 from .rigid import RigidNode, disk, static_unbalance
 from .rigid import couple_unbalance as _add_couple
 from .rotation import unit_axis
-from .sections import Section, element_materials
+from .sections import Section, element_materials, material_constants
 from .shaft import ShaftLayer, circular_layer
 from .speeds import GearPair, SpeedPlan
 from .template import SpeedTemplate, assemble_model, model_speed_plan
@@ -128,9 +128,9 @@ class Model:
         positions: Sequence[float],
         outer_diameter: float | Sequence[float] | None = None,
         inner_diameter: float | Sequence[float] = 0.0,
-        elastic_modulus: float | Sequence[float] = 2.1e11,
+        elastic_modulus: float | Sequence[float] | None = None,
         poisson_ratio: float | Sequence[float] | None = None,
-        density: float | Sequence[float] = 7850.0,
+        density: float | Sequence[float] | None = None,
         material_damping: float = 0.0,
         axis: Sequence[float] = (0.0, 0.0, 1.0),
         origin: Sequence[float] = (0.0, 0.0, 0.0),
@@ -139,6 +139,7 @@ class Model:
         shear_modulus: float | Sequence[float] | None = None,
         outer_diameter_right: float | Sequence[float] | None = None,
         inner_diameter_right: float | Sequence[float] | None = None,
+        material: str | None = None,
     ) -> None:
         """A flexible shaft of Timoshenko elements with nodes along its spin axis.
 
@@ -158,7 +159,11 @@ class Model:
             Material [Pa], [kg/m^3], per shaft or per element.
         poisson_ratio, shear_modulus
             Give one of them (per shaft or per element): Poisson's ratio [-] or the shear
-            modulus ``G`` [Pa] that textbooks and ROSS give; default ``poisson_ratio=0.3``.
+            modulus ``G`` [Pa] that textbooks and ROSS give.
+        material
+            A named material (``"steel"``, ...: :data:`~rheolin.mechanics.sections.MATERIALS`)
+            for the constants not given. rheolin assumes no material: without one, give
+            ``elastic_modulus``, ``density`` and ``poisson_ratio`` or ``shear_modulus``.
         material_damping
             Rotating material damping ``beta`` [s] (``D_B = beta K_B``).
         axis, origin
@@ -172,7 +177,8 @@ class Model:
         Examples
         --------
         >>> m = Model()
-        >>> m.add_shaft("s", [0.0, 0.25, 0.5], outer_diameter=0.03, shear_modulus=81e9)
+        >>> m.add_shaft("s", [0.0, 0.25, 0.5], outer_diameter=0.03, shear_modulus=81e9,
+        ...             material="steel")
         >>> m.bodies["s"].positions[:, 2]
         array([0.  , 0.25, 0.5 ])
         >>> round(m.bodies["s"].data["layers"][0][0].material.nu, 4)
@@ -185,8 +191,17 @@ class Model:
         e = unit_axis(axis, "axis")
         pts = np.asarray(origin, float) + np.outer(z, e)
         n_el = z.size - 1
+        need = {"elastic_modulus": elastic_modulus, "density": density}
+        if shear_modulus is None:
+            need["poisson_ratio"] = poisson_ratio
+        c = material_constants(material, need, f"add_shaft({name!r})")
         materials = element_materials(
-            n_el, elastic_modulus, density, poisson_ratio, shear_modulus, material_damping
+            n_el,
+            c["elastic_modulus"],
+            c["density"],
+            c.get("poisson_ratio", poisson_ratio),
+            shear_modulus,
+            material_damping,
         )
         if section is not None:
             if not isinstance(section, Section):
@@ -231,12 +246,13 @@ class Model:
         elements: Sequence[int],
         outer_diameter: float | Sequence[float],
         inner_diameter: float | Sequence[float] = 0.0,
-        elastic_modulus: float = 2.1e11,
+        elastic_modulus: float | None = None,
         poisson_ratio: float | None = None,
-        density: float = 7850.0,
+        density: float | None = None,
         shear_modulus: float | None = None,
         outer_diameter_right: float | Sequence[float] | None = None,
         inner_diameter_right: float | Sequence[float] | None = None,
+        material: str | None = None,
     ) -> None:
         """A concentric layer (sleeve, hub) added to some elements of a shaft.
 
@@ -245,8 +261,9 @@ class Model:
         negligible ``elastic_modulus`` adds mass and rotary inertia only.
 
         >>> m = Model()
-        >>> m.add_shaft("s", [0.0, 0.1, 0.2], outer_diameter=0.05)
-        >>> m.add_shaft_layer("s", [1], outer_diameter=0.08, inner_diameter=0.05, density=2700)
+        >>> m.add_shaft("s", [0.0, 0.1, 0.2], outer_diameter=0.05, material="steel")
+        >>> m.add_shaft_layer("s", [1], outer_diameter=0.08, inner_diameter=0.05,
+        ...                   material="aluminium")
         >>> [len(x) for x in m.bodies["s"].data["layers"]]
         [1, 2]
         """
@@ -258,11 +275,15 @@ class Model:
         if not idx or any(not 0 <= i < n_el for i in idx):
             raise ModelError(f"`elements` must be element indices in [0, {n_el}), got {elements!r}")
         k = len(idx)
+        need = {"elastic_modulus": elastic_modulus, "density": density}
+        if shear_modulus is None:
+            need["poisson_ratio"] = poisson_ratio
+        c = material_constants(material, need, f"add_shaft_layer({shaft!r})")
         mats = element_materials(
             k,
-            elastic_modulus,
-            density,
-            poisson_ratio,
+            c["elastic_modulus"],
+            c["density"],
+            c.get("poisson_ratio", poisson_ratio),
             shear_modulus,
             b.data["material"].damping_beta,
         )
@@ -385,17 +406,19 @@ class Model:
         inertia: Sequence[float] | np.ndarray | None = None,
         outer_diameter: float | None = None,
         width: float | None = None,
-        density: float = 7850.0,
+        density: float | None = None,
         inner_diameter: float = 0.0,
         unbalance: float = 0.0,
         unbalance_angle: float = 0.0,
         couple_unbalance: float = 0.0,
         couple_angle: float = 0.0,
+        material: str | None = None,
     ) -> None:
         """A rigid disk / gear blank at a body node, optionally with unbalance.
 
         Give either ``mass`` and ``inertia`` (about the centre of mass, body axes) or the
-        geometry ``outer_diameter``, ``width``, ``density``, ``inner_diameter``. With neither,
+        geometry ``outer_diameter``, ``width``, ``inner_diameter`` and ``density`` (or a named
+        ``material``, e.g. ``"steel"``: rheolin assumes none). With neither,
         the unbalance is added to the node's existing disk. ``unbalance`` [kg m] is static at
         ``unbalance_angle``; ``couple_unbalance`` [kg m^2] is dynamic at ``couple_angle``.
         """
@@ -409,7 +432,8 @@ class Model:
         elif outer_diameter is not None:
             if width is None:
                 raise ModelError("`width` is required with `outer_diameter`")
-            rn = disk(outer_diameter, width, density, inner_diameter, axis=e)
+            rho = material_constants(material, {"density": density}, f"add_disk({body!r})")
+            rn = disk(outer_diameter, width, float(rho["density"]), inner_diameter, axis=e)
         elif node in b.disks:
             rn = b.disks[node]
         else:
@@ -454,7 +478,7 @@ class Model:
         evaluated at the operating speed by every solver, Campbell diagram and stability map.
 
         >>> m = Model()
-        >>> m.add_shaft("s", [0.0, 0.5], outer_diameter=0.05)
+        >>> m.add_shaft("s", [0.0, 0.5], outer_diameter=0.05, material="steel")
         >>> m.add_bearing("b", "s", 0, stiffness=[[[1e7, 2e6], [-2e6, 1e7]], [[2e7, 4e6],
         ...               [-4e6, 2e7]]], damping=[1e3, 2e3], speeds=[100.0, 300.0],
         ...               interpolation="linear")

@@ -8,7 +8,9 @@ Shear factors of the closed-form sections follow Cowper (1966) and depend on Poi
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -244,3 +246,44 @@ def element_materials(
         Material(E=e, density=r, nu=v, damping_beta=damping_beta)
         for e, r, v in zip(E, rho, nu, strict=True)
     ]
+
+
+#: Materials a model may name instead of giving the constants (``material="steel"``):
+#: elastic modulus [Pa], Poisson's ratio, density [kg/m^3]. Explicit values override them.
+MATERIALS: dict[str, dict[str, float]] = {
+    "steel": {"elastic_modulus": 2.1e11, "poisson_ratio": 0.3, "density": 7850.0},
+    "stainless_steel": {"elastic_modulus": 1.93e11, "poisson_ratio": 0.29, "density": 8000.0},
+    "cast_iron": {"elastic_modulus": 1.1e11, "poisson_ratio": 0.26, "density": 7200.0},
+    "aluminium": {"elastic_modulus": 7.0e10, "poisson_ratio": 0.33, "density": 2700.0},
+    "titanium": {"elastic_modulus": 1.14e11, "poisson_ratio": 0.34, "density": 4430.0},
+}
+
+
+def material_constants(material: str | None, keys: Mapping[str, Any], where: str) -> dict[str, Any]:
+    """``keys`` (name -> value or None) with the missing ones from the named ``material``.
+
+    rheolin assumes no material: a constant that is neither given nor named is refused.
+    ``poisson_ratio`` is not needed when ``shear_modulus`` is given.
+
+    >>> material_constants("steel", {"elastic_modulus": 2e11, "density": None}, "add_shaft")
+    {'elastic_modulus': 200000000000.0, 'density': 7850.0}
+    >>> material_constants(None, {"density": None}, "add_disk")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    rheolin.errors.ModelError: add_disk: `density` is required (or name a material, ...
+    """
+    if material is not None and material not in MATERIALS:
+        raise ModelError(
+            f"{where}: `material` must be one of {', '.join(MATERIALS)}, got {material!r}"
+        )
+    out: dict[str, Any] = {}
+    for key, value in keys.items():
+        if value is None and material is not None:
+            value = MATERIALS[material][key]
+        if value is None:
+            raise ModelError(
+                f"{where}: `{key}` is required (or name a material, material='steel'; known: "
+                f"{', '.join(MATERIALS)}); rheolin assumes no material"
+            )
+        out[key] = float(value) if isinstance(value, int | float) else value
+    return out

@@ -111,8 +111,9 @@ class SpeedTemplate:
     --------
     >>> from rheolin.mechanics.model import Model
     >>> m = Model()
-    >>> m.add_shaft("s", [0.0, 0.5, 1.0], outer_diameter=0.05)
-    >>> m.add_disk("s", 1, outer_diameter=0.3, width=0.05, unbalance=1e-4)
+    >>> m.add_shaft("s", [0.0, 0.5, 1.0], outer_diameter=0.05, material="steel")
+    >>> m.add_disk("s", 1, outer_diameter=0.3, width=0.05, unbalance=1e-4,
+    ...            material="steel")
     >>> m.add_bearing("a", "s", 0, 1e7, 1e2); m.add_bearing("b", "s", 2, 1e7, 1e2)
     >>> t = SpeedTemplate(m)
     >>> a = t.assemble(300.0)

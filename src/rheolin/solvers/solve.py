@@ -13,7 +13,6 @@ from ..budget import format_bytes, memory_budget
 from ..floquet import dense_stability_harmonics, floquet, floquet_memory
 from ..harmonics import HarmonicSet, as_harmonic_set
 from ..operator import HarmonicBalance, SingularBlockError
-from ..rigid_modes import DENSE_LIMIT as RIGID_DENSE_LIMIT
 from ..rigid_modes import RigidModes, find_rigid_modes
 from ..solution import Solution
 from ..system import PeriodicSystem
@@ -135,11 +134,13 @@ def solve(
         stability=stability, options=options, backend=backend, sparse_backend=sparse_backend,
         memory_budget=memory_budget,
     )  # fmt: skip
-    # rigid-body modes: found up front on models small enough for one dense eigensolve;
-    # larger ones only once harmonic 0 turns out singular
-    rigid = find_rigid_modes(system) if system.n <= RIGID_DENSE_LIMIT else None
-    if rigid is not None:
-        return _constrained(system, rigid, hset, x0, again)
+    # rigid-body modes: looked for once harmonic 0 turns out singular (the factorization of
+    # A0(0) = K_0 says so at no cost); `direct` factorizes the coupled matrix instead, which
+    # the modes' coupling can leave regular, so it looks first
+    if method == "direct":
+        rigid = find_rigid_modes(system)
+        if rigid is not None:
+            return _constrained(system, rigid, hset, x0, again)
     opts = Options(rtol=float(rtol), maxiter=maxiter, callback=callback, extra=dict(options or {}))
     op = HarmonicBalance(
         system,
@@ -316,6 +317,8 @@ def _auto(op: HarmonicBalance, opts: Options) -> Solution:
     first = _finish(op, _run("gmres", op, opts), opts, "auto chose gmres")
     if first.success:
         return first
+    if first.info.get("singular_harmonic") == 0 and find_rigid_modes(op.system) is not None:
+        return first  # solve() holds the rigid-body modes and solves again
     fallback = _finish(
         op,
         _run("direct", op, opts),
