@@ -38,7 +38,7 @@ _CACHE_SIZE = 4
 
 def analysis_for(pencil: Pencil, backend: str, complex_values: bool, slots: int = 1) -> Analysis:
     """The analysis of the pencil's pattern by ``backend`` (cached by pattern and slots)."""
-    name = resolve_backend(backend)
+    name = resolve_backend(backend, (pencil.indptr, pencil.indices, pencil.n))
     key = (
         name,
         complex_values,
@@ -90,7 +90,7 @@ class FactorStore:
         workers: int = 1,
     ) -> None:
         self.pencil, self.ns = pencil, np.asarray(ns)
-        self.backend = resolve_backend(backend)
+        self.backend = resolve_backend(backend, (pencil.indptr, pencil.indices, pencil.n))
         complex_count = int(np.count_nonzero(self.ns))
         # PARDISO keeps every factor of a pattern in one handle: one slot per harmonic
         self._complex = (

@@ -12,7 +12,10 @@ Backends (``SPARSE_BACKENDS``), fastest first as measured (``bench/backends.py``
 * ``umfpack``: UMFPACK from SuiteSparse through ``kvxopt`` (a wheel that bundles it).
 * ``superlu``: SciPy's SuperLU (always there; holds the GIL; slow on 3-D meshes).
 
-``"auto"`` takes the first installed one.
+``"auto"`` chooses by the pattern (:func:`auto_backend`): PARDISO wins where factorizing is
+costly (2-D and 3-D meshes), but each of its solves costs ~0.5-3 ms more than SuperLU's, which
+dominates on banded patterns (shaft chains, beam-like models: gmres 3-30x slower there,
+measured); those get SuperLU.
 """
 
 from __future__ import annotations
@@ -28,7 +31,9 @@ __all__ = [
     "Analysis",
     "Factor",
     "analyze",
+    "auto_backend",
     "available_backends",
+    "envelope_work",
     "resolve_backend",
 ]
 
@@ -83,11 +88,58 @@ def available_backends() -> tuple[str, ...]:
     return tuple(out)
 
 
-def resolve_backend(name: str) -> str:
-    """The backend to use for ``name`` (``"auto"``: the fastest installed); a clear error
-    when a named one is missing."""
+#: Envelope work (flops of a banded LU after reverse Cuthill-McKee) above which the
+#: factorization is costly enough for PARDISO's per-call overhead not to matter (a 1e4-DOF
+#: shaft chain: ~1e6; a 1e4-DOF plate: ~1e9; a 1e4-DOF solid: ~1e10).
+CHEAP_WORK = 1e8
+
+
+def envelope_work(indptr: np.ndarray, indices: np.ndarray, n: int) -> float:
+    """``sum_i b_i^2`` over the rows of the symmetrized pattern after reverse Cuthill-McKee
+    (``b_i``: the row's distance to its first entry): the work of a banded LU, a cheap
+    (``O(nnz)``) measure of how costly factorizing the pattern is.
+
+    >>> import scipy.sparse as sp
+    >>> A = sp.csc_array(sp.diags_array([1.0, 2.0, 1.0], offsets=[-1, 0, 1], shape=(100, 100)))
+    >>> envelope_work(A.indptr, A.indices, 100)  # tridiagonal: b_i = 1 except the first row
+    99.0
+    """
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+    P = sp.csr_array((np.ones(indices.size), indices, indptr), shape=(n, n))
+    S = sp.csr_array(P + P.T)
+    perm = reverse_cuthill_mckee(S, symmetric_mode=True)
+    Q = sp.coo_array(S[perm][:, perm])
+    first = np.full(n, n, dtype=np.int64)
+    np.minimum.at(first, Q.row, Q.col)
+    b = np.maximum(np.arange(n) - np.minimum(first, np.arange(n)), 0).astype(float)
+    return float(np.sum(b * b))
+
+
+@functools.lru_cache(maxsize=16)
+def _auto_for(n: int, digest: int, size: int, work: float) -> str:
+    if work > CHEAP_WORK:
+        return available_backends()[0]  # PARDISO, else UMFPACK, else SuperLU
+    return "superlu"  # cheap factors: SuperLU's solves are 2-5x faster per call (measured)
+
+
+def auto_backend(indptr: np.ndarray, indices: np.ndarray, n: int) -> str:
+    """The backend ``"auto"`` takes for this pattern: when its envelope work exceeds
+    :data:`CHEAP_WORK` the fastest factorization installed (PARDISO, UMFPACK, SuperLU, in
+    that order); below, SuperLU, whose factorizations are as fast there and whose solves cost
+    2-5x less per call than UMFPACK's and PARDISO's (``bench/results/backends.md``): an
+    iterative method pays a solve per harmonic at every iteration."""
+    digest = hash((np.asarray(indptr).tobytes(), np.asarray(indices).tobytes()))
+    return _auto_for(n, digest, indices.size, envelope_work(indptr, indices, n))
+
+
+def resolve_backend(name: str, pattern: tuple[np.ndarray, np.ndarray, int] | None = None) -> str:
+    """The backend to use for ``name`` (``"auto"``: by ``pattern`` ``(indptr, indices, n)``,
+    :func:`auto_backend`, else the first installed); a clear error when a named one is
+    missing."""
     if name == "auto":
-        return available_backends()[0]
+        return auto_backend(*pattern) if pattern is not None else available_backends()[0]
     if name not in SPARSE_BACKENDS:
         allowed = ["auto", *SPARSE_BACKENDS]
         raise ValueError(f"`sparse_backend` must be one of {allowed}, got {name!r}")
