@@ -12,7 +12,7 @@ part ``dA`` is applied as a sparse convolution over harmonic indices, never asse
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import Any
 
 import numpy as np
@@ -255,6 +255,13 @@ class HarmonicBalance:
 
         return build(False), build(True)
 
+    def wide_harmonics(self, limit: int) -> list[int]:
+        """Coefficient harmonics ``k != 0`` whose block touches more than ``limit`` DOFs (an
+        asymmetric shaft, not a gear mesh or a single disk)."""
+        return sorted(
+            k for k, b in self._blocks.items() if k != 0 and max(b.rows.size, b.cols.size) > limit
+        )
+
     @property
     def coupling_harmonics(self) -> list[int]:
         """The nonzero coefficient harmonics that couple members of ``H``."""
@@ -412,12 +419,17 @@ class HarmonicBalance:
         return np.stack([apply(np.broadcast_to(e, (self.pos.size, cols.size))) for e in eye], -1)
 
     # ------------------------------------------------------------------ coupled
-    def coupled_matrix(self) -> sp.csc_array:
-        """The assembled block-sparse coupled matrix over the full set ``H`` (for ``direct``)."""
+    def coupled_matrix(self, harmonics: Iterable[int] | None = None) -> sp.csc_array:
+        """The assembled block-sparse coupled matrix over the full set ``H`` (for ``direct``);
+        with ``harmonics``, only the coefficient harmonics ``k`` listed (0 is always kept):
+        a preconditioner that holds part of the coupling exactly."""
         nd = self.n_dof
         pos_of = {int(n): j for j, n in enumerate(self.full)}
         rows_all, cols_all, vals_all = [], [], []
+        wanted = None if harmonics is None else {0, *(int(k) for k in harmonics)}
         for k, block in self._blocks.items():
+            if wanted is not None and k not in wanted:
+                continue
             r, c, _ = block.entries()
             ns, ms = [], []
             for n in self.full:
