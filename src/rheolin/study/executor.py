@@ -165,16 +165,34 @@ def local_cluster(workers: int | None = None) -> Iterator[Any]:
             threads_per_worker=1,
             processes=True,
             dashboard_address=None,
-            silence_logs=logging.ERROR,
+            # task failures come back through their futures; what the cluster logs at ERROR
+            # is shutdown noise (a tornado callback interrupted by Ctrl-C) on the user's console
+            silence_logs=logging.CRITICAL,
         )
     client = Client(cluster)
     try:
         yield client
     finally:
-        with contextlib.suppress(Exception):
-            client.close()
-        with contextlib.suppress(Exception):
-            cluster.close()
+        with _quiet("tornado", "distributed", "asyncio"):
+            with contextlib.suppress(Exception):
+                client.close()
+            with contextlib.suppress(Exception):
+                cluster.close()
+
+
+@contextlib.contextmanager
+def _quiet(*names: str) -> Iterator[None]:
+    """Loggers ``names`` at CRITICAL while closing the cluster (an interrupted close logs
+    tracebacks of cancelled callbacks that are not errors of the study)."""
+    loggers = [logging.getLogger(n) for n in names]
+    levels = [lg.level for lg in loggers]
+    for lg in loggers:
+        lg.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        for lg, level in zip(loggers, levels, strict=True):
+            lg.setLevel(level)
 
 
 @contextlib.contextmanager
