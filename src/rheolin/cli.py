@@ -29,6 +29,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
 from . import __version__
+from ._cli_condense import register as _register_condense
 from ._cli_errors import (
     EXIT_FAILED,
     ContractGroup,
@@ -178,6 +179,9 @@ VARY = typer.Option(
     "'bearings.input_A.stiffness=1e8:4e8:7 N/m' (repeat for a grid; docs/studies.md).",
 )
 DEMO_OUT = typer.Option(Path("demo_results"), help="Output directory.")
+EXAMPLE_OUT = typer.Option(
+    None, "--out", "-o", help="Write the example's files into this directory."
+)
 
 
 RTOL = typer.Option(
@@ -219,14 +223,40 @@ def validate(model: Path = MODEL) -> None:
 
 
 @app.command()
-def example(name: str = typer.Argument("gearbox", help="Example name.")) -> None:
-    """Write a built-in example model file to stdout: rheolin example gearbox > model.toml."""
+def example(
+    name: str = typer.Argument("gearbox", help="Example name."),
+    out: Path | None = EXAMPLE_OUT,
+) -> None:
+    """Write a built-in example model file to stdout (rheolin example gearbox > model.toml), or
+    its files into --out; gearbox-housing builds its FE housing (scikit-fem) into --out."""
     from .data import EXAMPLES, example_text
 
-    if name not in EXAMPLES:
-        listing = ", ".join(f"{k} ({v})" for k, v in EXAMPLES.items())
+    built = {"gearbox-housing": "the gearbox in a flexible FE housing (needs --out, scikit-fem)"}
+    if name not in EXAMPLES and name not in built:
+        listing = ", ".join(f"{k} ({v})" for k, v in {**EXAMPLES, **built}.items())
         raise _fail(f"no example named {name!r}; examples: {listing}")
-    sys.stdout.write(example_text(name))
+    if name in built:
+        if out is None:
+            raise _fail(f"--out: the {name} example writes two files; give a directory")
+        from .fe.gearbox_housing import build
+
+        directory = _out_dir(out, str(out))
+        path = build(directory)
+        console.print(
+            f"wrote {escape(str(path))} and {escape(str(directory / 'housing.npz'))}; "
+            f"run: rheolin run {escape(str(path))}",
+            highlight=False,
+        )
+        return
+    if out is None:
+        sys.stdout.write(example_text(name))
+        return
+    directory = _out_dir(out, str(out))
+    from .io.atomic import atomic_write
+
+    with atomic_write(directory / f"{name}.toml") as tmp:
+        tmp.write_text(example_text(name))
+    console.print(f"wrote {escape(str(directory / f'{name}.toml'))}", highlight=False)
 
 
 @app.command()
@@ -485,6 +515,7 @@ def demo(out: Path = DEMO_OUT) -> None:
 
 
 _register_ross(app)
+_register_condense(app)
 
 
 def _invoke(args: list[str]) -> int:
