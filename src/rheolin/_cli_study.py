@@ -216,6 +216,21 @@ def print_study_summary(console: Console, err: Console, result: Any) -> None:
                 highlight=False,
                 soft_wrap=True,
             )
+    from .study.files import resonances
+
+    peaks = [
+        f"{p['body']} ({p['node']}) {p['speed_rpm']:.0f} rpm, AF "
+        + ("n/a (half-power band not in the sweep)" if p["amplification_factor"] is None
+           else f"{p['amplification_factor']:.3g}")
+        for p in resonances(result)
+    ]  # fmt: skip
+    if peaks:
+        console.print(
+            "resonances (half-power amplification factor, API 684): " + "; ".join(peaks),
+            markup=False,
+            highlight=False,
+            soft_wrap=True,
+        )
     for w in result.warnings:
         err.print(f"warning: {w}", markup=False, highlight=False, soft_wrap=True)
     if result.written:

@@ -210,3 +210,35 @@ def test_another_study_in_the_directory_is_refused_then_replaced(band, tmp_path)
         "sweep.nc",
         "vary_bearings.spring.stiffness_1_.png",
     ]
+
+
+ISO = BAND.replace(
+    'stiffness = ["1e4 N/m", "1.21e4 N/m"]\ndamping = ["0 N*s/m", "0 N*s/m"]\nframe = "r"',
+    'stiffness = ["1e4 N/m", "1e4 N/m"]\ndamping = ["10 N*s/m", "10 N*s/m"]',
+)
+
+
+def test_sweep_reports_resonances_with_their_amplification_factor(tmp_path):
+    """The rigid rotor on an isotropic spring, zeta = 0.05, w_n = 100 rad/s: one resonance,
+    its peak and half-power amplification factor as the closed form of the unbalance response
+    ``e W^2 / |w_n^2 - W^2 + 2 i zeta w_n W|`` (root finding on the analytic curve)."""
+    from scipy.optimize import brentq
+
+    assert ISO != BAND
+    (tmp_path / "iso.toml").write_text(ISO)
+    out = tmp_path / "s"
+    res = cli("sweep", str(tmp_path / "iso.toml"), "--speeds", "600:1400:4rpm", "--stability",
+              "off", "--workers", "1", "--no-plots", "--out", str(out))  # fmt: skip
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "resonances (half-power amplification factor, API 684): r (" in res.stdout
+    (peak,) = json.loads((out / "sweep.json").read_text())["resonances"]
+    zeta, wn = 0.05, 100.0
+    x = lambda w: w**2 / abs(wn**2 - w**2 + 2j * zeta * wn * w)  # noqa: E731
+    wp = wn / np.sqrt(1 - 2 * zeta**2)
+    lo = brentq(lambda w: x(w) - x(wp) / np.sqrt(2), 50.0, wp)
+    hi = brentq(lambda w: x(w) - x(wp) / np.sqrt(2), wp, 200.0)
+    assert abs(peak["speed_rpm"] * np.pi / 30 / wp - 1) < 1e-3
+    assert abs(peak["amplification_factor"] / (wp / (hi - lo)) - 1) < 5e-3
+    # the study's response is hypot(|x_n|, |y_n|) x 2 per harmonic: sqrt(2) R on a circular
+    # orbit of radius R = e x(W), e = 1e-6 kg m / 1 kg
+    assert abs(peak["amplitude_m"] / (np.sqrt(2) * 1e-6 * x(wp)) - 1) < 1e-3

@@ -6,7 +6,8 @@
 * ``sweep.json``: per point ``success``, ``status``, ``iterations``, ``stable`` (nested as
   ``(*parameters, speed)``), every unstable range (bounds in rpm, open ends, largest real
   part, ``mechanism`` category, one-line ``label`` and the mechanism's ``detail``) with its
-  parameter values, the failed points with their messages, warnings;
+  parameter values, the failed points with their messages, the resonance peaks of a speed
+  sweep with their half-power amplification factors (API 684), warnings;
 * plots: ``sweep.png`` and ``stability_map.png`` without parameters, one
   ``vary_<parameter>.png`` per parameter otherwise.
 
@@ -29,7 +30,7 @@ from ..results.dataset import write_dataset
 from ..results.schema import SCHEMA_VERSION
 from .store import CheckpointStore
 
-__all__ = ["plot_name", "sweep_table", "write_results"]
+__all__ = ["plot_name", "resonances", "sweep_table", "write_results"]
 
 RPM = 30 / np.pi
 
@@ -116,9 +117,48 @@ def sweep_table(result: Any) -> dict[str, Any]:
         "unstable_ranges_rpm": [(r["lower_rpm"], r["upper_rpm"]) for r in ranges],
         "unstable_ranges": ranges,
         "failed": failed,
+        "resonances": resonances(result),
         "points": {"total": spec.n_points, "resumed": result.resumed, "computed": result.computed},
         "warnings": result.warnings,
     }
+
+
+def resonances(result: Any) -> list[dict[str, Any]]:
+    """The resonance peaks of a speed sweep (no parameters), per body at its most responsive
+    node: the oscillating radial response (sum over harmonics, as ``sweep.png``) against speed,
+    with the half-power amplification factor (:mod:`rheolin.results.api684`). Empty for a
+    parameter study, fewer than five speeds, or no response."""
+    from ..results.api684 import amplification_factors
+
+    spec, ds = result.spec, result.dataset
+    if spec.parameters or "response" not in ds or spec.speeds.size < 5:
+        return []
+    resp = ds["response"].where(ds["harmonic"] > 0, 0.0).sum("harmonic")  # (point, node)
+    speeds = np.asarray(spec.speeds, dtype=float)
+    order = np.argsort(speeds)
+    out = []
+    for body in dict.fromkeys(np.asarray(ds["body"].values).tolist()):
+        per = resp.where(ds["body"] == body, drop=True)
+        values = np.asarray(per.values, dtype=float)[order]
+        ok = np.all(np.isfinite(values), axis=1)
+        if ok.sum() < 5 or not np.any(values[ok] > 0):
+            continue
+        j = int(np.nanargmax(values[ok].max(axis=0)))
+        node = str(per["node"].values[j])
+        for p in amplification_factors(speeds[order][ok], values[ok][:, j]):
+            out.append(
+                {
+                    "body": str(body),
+                    "node": node,
+                    "speed_rpm": p.speed * RPM,
+                    "amplitude_m": p.amplitude,
+                    "amplification_factor": p.amplification_factor,
+                    "half_power_rpm": None
+                    if p.lower is None or p.upper is None
+                    else [p.lower * RPM, p.upper * RPM],
+                }
+            )
+    return out
 
 
 def _nested(values: np.ndarray, convert: Any) -> Any:
