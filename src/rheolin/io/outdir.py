@@ -118,12 +118,12 @@ def staged_output(out: str | Path, owned: Iterable[str]) -> Iterator[Path]:
     _remove_stale_stages(parent, target.name)
     stage = parent / _STAGE.format(name=target.name, pid=os.getpid())
     shutil.rmtree(stage, ignore_errors=True)
-    try:
-        stage.mkdir()
-    except OSError:  # the parent is not writable, the directory itself is: stage inside it
-        stage = target / _STAGE.format(name="", pid=os.getpid())
-        stage.mkdir(parents=True)
-    try:
+    try:  # made inside the try: a Ctrl-C right after the mkdir still removes it
+        try:
+            stage.mkdir()
+        except OSError:  # the parent is not writable, the directory itself is: stage inside
+            stage = target / _STAGE.format(name="", pid=os.getpid())
+            stage.mkdir(parents=True)
         yield stage
         new = sorted(p.name for p in stage.iterdir() if p.is_file())
         target.mkdir(parents=True, exist_ok=True)
