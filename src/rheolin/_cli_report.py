@@ -34,7 +34,7 @@ def parse_speed(text: str, option: str = "--speed") -> float:
     return v
 
 
-def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
+def parse_speeds(text: str, option: str = "--speeds", allow_zero: bool = False) -> np.ndarray:
     """``"500:6000:50rpm"`` (start:stop:step, stop included) or ``"1000,2000 rpm"`` -> rad/s.
 
     >>> (parse_speeds("1000:3000:1000rpm") * 30 / np.pi).round(6).tolist()
@@ -47,8 +47,9 @@ def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
             start, stop, step = (float(m.group(i)) for i in (1, 2, 3))
         except ValueError:
             raise ModelError(f"{option}: cannot read {text!r}; write e.g. 500:6000:50rpm") from None
-        if not (step > 0 and stop >= start > 0):
-            raise ModelError(f"{option}: need 0 < start <= stop and step > 0, got {text!r}")
+        if not (step > 0 and stop >= start and (start > 0 or (allow_zero and start == 0))):
+            low = "0 <=" if allow_zero else "0 <"
+            raise ModelError(f"{option}: need {low} start <= stop and step > 0, got {text!r}")
         count = math.floor((stop - start) / step + 1e-9) + 1
         if count > 10000:
             raise ModelError(f"{option}: {count} speeds is too many (at most 10000)")
@@ -67,6 +68,10 @@ def parse_speeds(text: str, option: str = "--speeds") -> np.ndarray:
             raise ModelError(f"{option}: cannot read {text!r}; write e.g. 500:6000:50rpm") from None
         if not values:
             raise ModelError(f"{option}: no speeds in {text!r}")
+    if allow_zero:
+        return np.array(
+            [0.0 if v == 0 else parse_speed(f"{v} {unit}".strip(), option) for v in values]
+        )
     return np.array([parse_speed(f"{v} {unit}".strip(), option) for v in values])
 
 

@@ -388,7 +388,9 @@ def sweep(
 @app.command()
 def campbell(
     model: Path = MODEL,
-    speeds: str = typer.Option(..., help="start:stop:step with unit, e.g. 100:6000:100rpm."),
+    speeds: str = typer.Option(
+        ..., help="start:stop:step with unit, e.g. 0:6000:100rpm (0: standstill)."
+    ),
     out: Path = OUT,
     fmax: float = typer.Option(None, help="Plot up to this frequency [Hz] (default: auto)."),
     stability: str = STABILITY,
@@ -400,12 +402,14 @@ def campbell(
     from .stability import campbell as campbell_fn
 
     lm = _load(model)
-    w = parse_speeds(speeds)
+    w = parse_speeds(speeds, allow_zero=True)  # 0: the modes at standstill
+    spinning = w[w > 0]  # what the preflight and the Floquet map look at
     flag = _stability_flag(stability)
     if fmax is not None and not (np.isfinite(fmax) and fmax > 0):
         raise _fail(f"--fmax: must be a frequency > 0 in Hz, got {fmax}")
     out_dir = _out_dir(out, f"{model.stem}_campbell")
-    _preflight(lm, w, None, None, needs_load=False)
+    if spinning.size:
+        _preflight(lm, spinning, None, None, needs_load=False)
     from .plots.campbell import plot_campbell
     from .results.dataset import write_dataset
 
@@ -413,7 +417,11 @@ def campbell(
     with sigterm_as_interrupt():
         with err.status("Campbell diagram"):
             result = campbell_fn(lm.model, w)
-        smap, why = _campbell_stability(lm.model, w, flag)
+        smap, why = (
+            _campbell_stability(lm.model, spinning, flag)
+            if spinning.size
+            else (None, "standstill only")
+        )
     with sigterm_as_interrupt(), staged_output(out_dir, CAMPBELL_FILES) as stage:
         write_dataset(result.to_dataset(), stage / "campbell.nc")
         if smap is not None:

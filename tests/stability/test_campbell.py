@@ -93,3 +93,18 @@ def test_critical_speeds_are_order_line_crossings() -> None:
     assert crit[0].speed == pytest.approx(ref.min(), rel=2e-3)
     ds = res.to_dataset()
     assert "critical_speed" in ds and ds.sizes["speed"] == speeds.size
+
+
+def test_standstill_modes_are_the_non_spinning_closed_form() -> None:
+    """W = 0 is allowed: forward and backward whirl coincide there, each lateral frequency
+    twice, the roots of the quartic without the gyroscopic term; the CLI takes 0:...rpm."""
+    res = campbell(_overhung(), np.array([0.0, 500.0]))
+    assert res.speeds[0] == 0.0
+    f0 = res.frequency[0][np.isfinite(res.frequency[0])]
+    for ref in _whirl_frequencies(0.0, +1):
+        assert np.sum(np.abs(f0 / ref - 1) < 1e-8) == 2, (ref, f0)
+    with pytest.raises(ValueError, match=">= 0"):
+        campbell(_overhung(), np.array([-1.0, 500.0]))
+    from rheolin._cli_report import parse_speeds
+
+    assert parse_speeds("0:1000:500rpm", allow_zero=True)[0] == 0.0

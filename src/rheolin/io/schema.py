@@ -109,6 +109,7 @@ DampingNonNeg = Annotated[float, BeforeValidator(_quantity("damping", "0+"))]
 DensityPos = Annotated[float, BeforeValidator(_quantity("density", "+"))]
 DensityNonNeg = Annotated[float, BeforeValidator(_quantity("density", "0+"))]
 LengthPos = Annotated[float, BeforeValidator(_quantity("length", "+"))]
+Length = Annotated[float, BeforeValidator(_quantity("length"))]
 LengthNonNeg = Annotated[float, BeforeValidator(_quantity("length", "0+"))]
 MassPos = Annotated[float, BeforeValidator(_quantity("mass", "+"))]
 MassNonNeg = Annotated[float, BeforeValidator(_quantity("mass", "0+"))]
@@ -199,6 +200,7 @@ class Disk(_Strict):
     unbalance_angle: Angle = 0.0
     couple_unbalance: CoupleUnbalanceNonNeg = 0.0
     couple_angle: Angle = 0.0
+    axial_offset: Length = 0.0
 
     @field_validator("inertia")
     @classmethod

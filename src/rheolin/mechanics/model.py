@@ -413,6 +413,7 @@ class Model:
         couple_unbalance: float = 0.0,
         couple_angle: float = 0.0,
         material: str | None = None,
+        axial_offset: float = 0.0,
     ) -> None:
         """A rigid disk / gear blank at a body node, optionally with unbalance.
 
@@ -421,6 +422,10 @@ class Model:
         ``material``, e.g. ``"steel"``: rheolin assumes none). With neither,
         the unbalance is added to the node's existing disk. ``unbalance`` [kg m] is static at
         ``unbalance_angle``; ``couple_unbalance`` [kg m^2] is dynamic at ``couple_angle``.
+        ``axial_offset`` [m] puts the disk's centre of mass that far from the node along the
+        body's spin axis (a disk overhung on its hub, a gear beside its bearing seat): the
+        node carries the disk's mass and inertia with their lever arm, coupling translation and
+        tilt exactly (no extra node, no stiff link).
         """
         b = self._body(body, "body")
         node = self._node(b, node)
@@ -444,6 +449,12 @@ class Model:
             rn = _add_couple(rn, couple_unbalance, couple_angle, axis=e)
         if node in b.disks and (mass is not None or outer_diameter is not None):
             raise ModelError(f"`node`: node {node} of body {body!r} already has a disk")
+        if axial_offset:
+            if not np.isfinite(axial_offset):
+                raise ModelError(f"`axial_offset` must be finite, got {axial_offset!r}")
+            if rn.mass <= 0.0:
+                raise ModelError("`axial_offset` needs a disk with mass")
+            rn = RigidNode(rn.mass, rn.inertia, rn.com + float(axial_offset) * np.asarray(e))
         b.disks[node] = rn
 
     # ------------------------------------------------------------------ joints and loads

@@ -139,6 +139,10 @@ def order_lines(model: Any, speed: float = 1.0) -> dict[str, float]:
     return out
 
 
+#: The speed [rad/s] a standstill point of a Campbell diagram is assembled at.
+STANDSTILL = 1e-9
+
+
 def campbell(
     model: Any,
     speeds_rad_s: Any,
@@ -160,7 +164,7 @@ def campbell(
     model
         The model.
     speeds_rad_s
-        Increasing input speeds [rad/s], > 0.
+        Increasing input speeds [rad/s], >= 0 (0: the modes at standstill).
     n_modes
         Number of lowest modes kept (default: all for small models, 12 for large ones).
     method
@@ -181,11 +185,18 @@ def campbell(
     [100.0]
     """
     speeds = np.asarray(speeds_rad_s, dtype=float).ravel()
-    if speeds.size < 1 or np.any(speeds <= 0) or np.any(np.diff(speeds) <= 0):
-        raise ValueError("`speeds_rad_s` must be positive and strictly increasing [rad/s]")
+    if (
+        speeds.size < 1
+        or not np.all(np.isfinite(speeds))
+        or np.any(speeds < 0)
+        or np.any(np.diff(speeds) <= 0)
+    ):
+        raise ValueError("`speeds_rad_s` must be >= 0 and strictly increasing [rad/s]")
     rows = []
     for W in speeds:
-        a = model.assemble(float(W))
+        # standstill: the periodic system needs a base frequency > 0; at 1e-9 rad/s the speed
+        # terms (gyroscopic, centrifugal) are ~1e-9 of their value at 1 rad/s: the W = 0 modes
+        a = model.assemble(float(W) if W > 0 else STANDSTILL)
         modes = averaged_modes(a.system, n_modes, method=method)
         axes = {b: model.bodies[b].axis for b in model.bodies}
         ratio = whirl_ratio(modes.shapes, a.dof_labels, axes, a.plan.spin)
