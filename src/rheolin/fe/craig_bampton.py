@@ -29,6 +29,7 @@ body-frame equations into the inertial frame (:mod:`rheolin.mechanics.condensed`
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -41,11 +42,13 @@ import scipy.sparse.linalg as spla
 
 from ..errors import ModelError
 from ..io.atomic import atomic_write
-from ..linalg.direct import analyze
+from ..linalg.direct import analyze, resolve_backend
 from .coupling import Coupling, coupling_transform, rigid_map
 from .matrices import FEModel
 
 __all__ = ["CondensedFE", "condense"]
+
+log = logging.getLogger(__name__)
 
 
 @dataclass
@@ -211,9 +214,15 @@ def condense(
     Kii = sp.csc_array(Kt[nb:, nb:])
     Kii.sort_indices()
     Mii = sp.csr_array(Mt[nb:, nb:])
-    factor = analyze(sparse_backend, Kii.indptr, Kii.indices, False, sample=Kii.data).factor(
-        Kii.data
-    )
+    name = resolve_backend(sparse_backend, (Kii.indptr, Kii.indices, Kii.shape[0]))
+    factor = analyze(name, Kii.indptr, Kii.indices, False, sample=Kii.data).factor(Kii.data)
+    # the factor serves every constraint mode and every Lanczos step: check it on a probe and
+    # redo it with SuperLU when it is not accurate (PARDISO once gave a wrong one mid-run)
+    probe = np.cos(np.arange(n_i) * 0.37)
+    err = np.linalg.norm(Kii @ np.asarray(factor.solve(probe)).real - probe)
+    if name != "superlu" and not err <= 1e-8 * np.linalg.norm(probe):
+        log.warning("condense: the %s factor failed its probe (%.2g); using SuperLU", name, err)
+        factor = analyze("superlu", Kii.indptr, Kii.indices, False).factor(Kii.data)
     Kib = Kt[nb:, :nb].toarray()
     Psi = -np.asarray(factor.solve(Kib)).real
     scale = np.linalg.norm(Kib) + 1e-300
