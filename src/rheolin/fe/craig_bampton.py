@@ -217,7 +217,7 @@ def condense(
     name = resolve_backend(sparse_backend, (Kii.indptr, Kii.indices, Kii.shape[0]))
     factor = analyze(name, Kii.indptr, Kii.indices, False, sample=Kii.data).factor(Kii.data)
     # the factor serves every constraint mode and every Lanczos step: check it on a probe and
-    # redo it with SuperLU when it is not accurate (PARDISO once gave a wrong one mid-run)
+    # redo it with SuperLU when it is not accurate
     probe = np.cos(np.arange(n_i) * 0.37)
     err = np.linalg.norm(Kii @ np.asarray(factor.solve(probe)).real - probe)
     if name != "superlu" and not err <= 1e-8 * np.linalg.norm(probe):
