@@ -119,6 +119,10 @@ def plain_error(message: str, prefix: str = "error") -> None:
 def _interrupted() -> None:
     kept = _STATE["kept"] or "nothing was written"
     err.print(f"interrupted: {kept}", markup=False, highlight=False, soft_wrap=True)
+    if not _debug():
+        # objects the interrupt cut short mid-construction (an h5netcdf file) fail in their
+        # finalizers at exit; Python prints those as "Exception ignored" tracebacks
+        sys.unraisablehook = lambda unraisable: None
 
 
 def _internal(exc: BaseException) -> None:
