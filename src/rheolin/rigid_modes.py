@@ -59,6 +59,10 @@ def _dense(x: Any) -> np.ndarray:
     return x.toarray() if sp.issparse(x) else np.asarray(x)
 
 
+def _diagonal(x: Any) -> np.ndarray:
+    return np.asarray(x.diagonal() if sp.issparse(x) else np.diag(np.asarray(x)), dtype=float)
+
+
 @dataclass
 class RigidModes:
     """Rigid-body modes ``R`` (``n x k``, ``R^T M_0 R = I``) and the constraint that holds them.
@@ -126,11 +130,7 @@ class RigidModes:
 
     def dominant_dofs(self, system: PeriodicSystem) -> list[int]:
         """Per mode, the DOF with the largest mass-weighted amplitude (to name the motion)."""
-        m = (
-            np.abs(_dense(system.coefficient("M", 0)).diagonal())
-            if self.n <= DENSE_LIMIT
-            else (np.abs(sp.csr_array(system.coefficient("M", 0)).diagonal()))
-        )
+        m = np.abs(_diagonal(system.coefficient("M", 0)))
         return [int(np.argmax(np.abs(r) * np.sqrt(m))) for r in self.modes.T]
 
     def note(self, system: PeriodicSystem) -> str:
@@ -210,7 +210,7 @@ def find_rigid_modes(system: PeriodicSystem) -> RigidModes | None:
     if M0 is None or K0 is None or n < 2:
         return None
     sparse = sp.issparse(M0) or sp.issparse(K0)
-    d = np.abs(sp.csr_array(M0).diagonal() if sp.issparse(M0) else np.diag(M0))
+    d = np.abs(_diagonal(M0))
     if d.max(initial=0.0) <= 0.0:
         return None
     d = np.maximum(d, 1e-12 * d.max())
@@ -254,9 +254,7 @@ def find_rigid_modes(system: PeriodicSystem) -> RigidModes | None:
     C = np.asarray(Md @ R)  # constraint C^T q = 0
     k = R.shape[1]
     varying = _varying_dofs(system)
-    pivots = None
     Cs = C * s[:, None]  # in mass-scaled units: a scale-free choice
-
     size = float(np.linalg.norm(Cs, 2))
 
     def pick(pool: np.ndarray) -> tuple[np.ndarray, float]:

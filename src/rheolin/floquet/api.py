@@ -128,16 +128,27 @@ def floquet(
     if method not in allowed:
         raise ValueError(f"`method` must be one of {list(allowed)}, got {method!r}")
     rigid = find_rigid_modes(system)
+    held = system if rigid is None else rigid.reduce(system)
+    res = _floquet(held, harmonics, method, order, frequencies, k, max_shifts, memory_budget, near)
     if rigid is not None:  # their zero exponents are a Jordan block: held, not analysed
-        res = floquet(
-            rigid.reduce(system), harmonics, method=method, order=order,
-            frequencies=frequencies, k=k, max_shifts=max_shifts, memory_budget=memory_budget,
-            near=near,
-        )  # fmt: skip
         note = rigid.note(system)
         res.info["note"] = f"{note}; {res.info['note']}" if res.info.get("note") else note
         res.info["rigid_modes"] = rigid.count
-        return res
+    return res
+
+
+def _floquet(
+    system: PeriodicSystem,
+    harmonics: HarmonicSet | Lattice | int | Iterable[int] | None,
+    method: str,
+    order: int | None,
+    frequencies: tuple[float, float] | None,
+    k: int,
+    max_shifts: int,
+    memory_budget: str | int | float | None,
+    near: Any,
+) -> FloquetResult:
+    """:func:`floquet` on a system without rigid-body modes (checked by the caller)."""
     budget = memory_budget
     if isinstance(harmonics, Lattice):
         if method not in ("auto", "lattice"):
@@ -171,7 +182,7 @@ def floquet(
     _require_grid(hset)
     size = 2 * system.n * len(hset)
     if method == "auto" and harmonics is None and size <= AUTO_DENSE_LIMIT:
-        res = floquet(system, hset, method="dense", memory_budget=budget)
+        res = _floquet(system, hset, "dense", None, None, k, max_shifts, budget, None)
         if res.decided:
             return res
         # the dense grid could not decide (a truncation that has not converged near the

@@ -78,6 +78,23 @@ class _Body:
     disks: dict[int, RigidNode] = field(default_factory=dict)
 
 
+def _shaft_constants(
+    material: str | None,
+    elastic_modulus: Any,
+    density: Any,
+    poisson_ratio: Any,
+    shear_modulus: Any,
+    where: str,
+) -> tuple[Any, Any, Any]:
+    """Elastic modulus, density and Poisson's ratio (not needed with a shear modulus): given,
+    or from the named ``material``; refused when neither (rheolin assumes no material)."""
+    need = {"elastic_modulus": elastic_modulus, "density": density}
+    if shear_modulus is None:
+        need["poisson_ratio"] = poisson_ratio
+    c = material_constants(material, need, where)
+    return c["elastic_modulus"], c["density"], c.get("poisson_ratio", poisson_ratio)
+
+
 class Model:
     """A transmission: bodies (shafts, rigid bodies), disks, joints, gear meshes and loads.
 
@@ -191,18 +208,10 @@ class Model:
         e = unit_axis(axis, "axis")
         pts = np.asarray(origin, float) + np.outer(z, e)
         n_el = z.size - 1
-        need = {"elastic_modulus": elastic_modulus, "density": density}
-        if shear_modulus is None:
-            need["poisson_ratio"] = poisson_ratio
-        c = material_constants(material, need, f"add_shaft({name!r})")
-        materials = element_materials(
-            n_el,
-            c["elastic_modulus"],
-            c["density"],
-            c.get("poisson_ratio", poisson_ratio),
-            shear_modulus,
-            material_damping,
+        E, rho, nu = _shaft_constants(
+            material, elastic_modulus, density, poisson_ratio, shear_modulus, f"add_shaft({name!r})"
         )
+        materials = element_materials(n_el, E, rho, nu, shear_modulus, material_damping)
         if section is not None:
             if not isinstance(section, Section):
                 raise ModelError("`section` must be a rheolin.mechanics.sections.Section")
@@ -275,18 +284,15 @@ class Model:
         if not idx or any(not 0 <= i < n_el for i in idx):
             raise ModelError(f"`elements` must be element indices in [0, {n_el}), got {elements!r}")
         k = len(idx)
-        need = {"elastic_modulus": elastic_modulus, "density": density}
-        if shear_modulus is None:
-            need["poisson_ratio"] = poisson_ratio
-        c = material_constants(material, need, f"add_shaft_layer({shaft!r})")
-        mats = element_materials(
-            k,
-            c["elastic_modulus"],
-            c["density"],
-            c.get("poisson_ratio", poisson_ratio),
+        E, rho, nu = _shaft_constants(
+            material,
+            elastic_modulus,
+            density,
+            poisson_ratio,
             shear_modulus,
-            b.data["material"].damping_beta,
+            f"add_shaft_layer({shaft!r})",
         )
+        mats = element_materials(k, E, rho, nu, shear_modulus, b.data["material"].damping_beta)
         do = _per_element(outer_diameter, k, "outer_diameter")
         di = _per_element(inner_diameter, k, "inner_diameter")
         dor = (

@@ -29,6 +29,7 @@ part touches):
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 
 import numpy as np
@@ -205,9 +206,7 @@ def _full_on(
     op: HarmonicBalance, opts: Options, maxiter: int, Q: np.ndarray, history: list[float]
 ) -> tuple[np.ndarray, int, list[float]]:
     """Go on with the ``full`` strategy from ``Q`` for the iterations left of ``maxiter``."""
-    rest = Options(
-        rtol=opts.rtol, maxiter=maxiter - len(history), callback=opts.callback, extra=opts.extra
-    )
+    rest = dataclasses.replace(opts, maxiter=maxiter - len(history))
     Q, info, more = _full_step(op, rest)(op.rhs, Q)
     return Q, info, history + more
 
@@ -227,10 +226,7 @@ def solve_gmres(op: HarmonicBalance, opts: Options) -> SolverOutcome:
     note = ""
     maxiter = 500 if opts.maxiter is None else int(opts.maxiter)
     if strategy == "full" and op.wide_harmonics(MAX_SUPPORT) and maxiter > PROBE_ITERATIONS:
-        probe = Options(
-            rtol=opts.rtol, maxiter=PROBE_ITERATIONS, callback=opts.callback, extra=opts.extra
-        )
-        probe.x0 = opts.x0
+        probe = dataclasses.replace(opts, maxiter=PROBE_ITERATIONS)
         Q, info, history = _full_step(op, probe)(op.rhs, opts.x0)
         if info != 0 and len(history) >= 2 and 0 < history[-1] < history[0]:
             rate = (history[-1] / history[0]) ** (1.0 / (len(history) - 1))

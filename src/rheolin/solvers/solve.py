@@ -151,9 +151,19 @@ def solve(
         memory_budget=memory_budget,
     )
     opts.x0 = _initial_guess(op, x0)
-    sol = _auto(op, opts) if method == "auto" else _finish(op, _run(method, op, opts), opts)
+    found: list[RigidModes | None] = []  # looked for at most once
+
+    def rigid_modes() -> RigidModes | None:
+        if not found:
+            found.append(find_rigid_modes(system))
+        return found[0]
+
+    if method == "auto":
+        sol = _auto(op, opts, rigid_modes)
+    else:
+        sol = _finish(op, _run(method, op, opts), opts)
     if not sol.success and sol.info.get("singular_harmonic") == 0:
-        rigid = find_rigid_modes(system)
+        rigid = rigid_modes()
         if rigid is not None:
             return _constrained(system, rigid, hset, x0, again)
     return _check_stability(system, sol, stability)
@@ -310,14 +320,16 @@ def _finish(op: HarmonicBalance, out: SolverOutcome, opts: Options, note: str = 
     )
 
 
-def _auto(op: HarmonicBalance, opts: Options) -> Solution:
+def _auto(
+    op: HarmonicBalance, opts: Options, rigid_modes: Callable[[], RigidModes | None]
+) -> Solution:
     """``lti`` for a time-invariant system; else ``gmres``, falling back to ``direct``."""
     if not op.system.coefficient_harmonics:
         return _finish(op, _run("lti", op, opts), opts, "auto chose lti (time-invariant)")
     first = _finish(op, _run("gmres", op, opts), opts, "auto chose gmres")
     if first.success:
         return first
-    if first.info.get("singular_harmonic") == 0 and find_rigid_modes(op.system) is not None:
+    if first.info.get("singular_harmonic") == 0 and rigid_modes() is not None:
         return first  # solve() holds the rigid-body modes and solves again
     fallback = _finish(
         op,
