@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import scipy.linalg as sla
 from scipy.special import mathieu_a, mathieu_b
 
 import rheolin as rl
@@ -412,3 +413,21 @@ def test_auto_takes_the_lattice_when_the_dense_grid_cannot_decide() -> None:
     assert res.method == "lattice" and res.decided and res.stable
     assert "dense Hill grid" in res.info["note"]
     assert res.max_real == pytest.approx(wide.max_real, rel=1e-6)
+
+
+def test_unresolved_exponents_continued_on_the_finer_lattice() -> None:
+    """A strongly pumped damped Mathieu equation: on the order-2 lattice (-2..2) its real
+    exponent pair is unresolved; the finer lattice continues it from the coarse eigenvectors
+    (a warm start), and the replaced exponents are those of the dense Hill method on -3..3
+    (the same truncation), within their stated uncertainty of the monodromy matrix."""
+    system = mathieu(4.2, 3.0, 0.3)
+    res = rl.floquet(system, method="lattice")
+    (step,) = res.info["confirmed"]
+    assert step["order"] == 3 and step["replaced"] == 1 and step["warm_starts"] == 1
+    assert np.all(res.info["order"] == 3)
+    A, B = hill_pencil(system, np.arange(-3, 4))
+    dense = sla.eigvals(A.toarray(), B.toarray())
+    assert match_folded(res.exponents, dense, system.omega) < 1e-10
+    ref = monodromy_max_real(system)
+    assert res.decided and not res.stable
+    assert abs(res.max_real - ref) <= res.info["uncertainty"][0]

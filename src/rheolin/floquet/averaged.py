@@ -18,6 +18,12 @@ __all__ = ["LU_FILL", "MAX_AVERAGED_DENSE", "lattice_memory"]
 MAX_AVERAGED_DENSE = 4000
 
 
+#: Below this condition number of the balanced ``B`` the pencil is reduced to the standard
+#: problem ``B^-1 A`` (5x faster than QZ on the gearbox, 252 x 252: 0.05 s against 0.25 s);
+#: above it (massless DOFs: ``B`` singular) QZ keeps the infinite eigenvalues apart.
+STANDARD_COND = 1e6
+
+
 #: Estimated LU fill of the lattice operator (entries of the factors / entries of ``Q``).
 LU_FILL = 12.0
 
@@ -35,7 +41,12 @@ class _Averaged:
             )
         A, B = hill_pencil(system, [0])
         Ad, Bd = A.toarray(), B.toarray()
-        lam, W, X = sla.eig(Ad, Bd, left=True, right=True, check_finite=False)
+        if np.linalg.cond(Bd) <= STANDARD_COND:
+            # left vectors of the pencil from those of B^-1 A: w^H B^-1 A = lam w^H B^-1
+            lam, Y, X = sla.eig(np.linalg.solve(Bd, Ad), left=True, right=True, check_finite=False)
+            W = np.linalg.solve(Bd.conj().T, Y)
+        else:
+            lam, W, X = sla.eig(Ad, Bd, left=True, right=True, check_finite=False)
         finite = np.isfinite(lam)
         self.lam = lam[finite]
         X, W = X[:, finite], W[:, finite]

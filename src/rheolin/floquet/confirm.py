@@ -20,7 +20,10 @@ def confirm_unresolved(
 ) -> LatticeExponents:
     """Settle the unresolved, uncertified representatives on a finer lattice.
 
-    Their clusters are searched again on ``finer`` (only near them). Where the finer lattice
+    Their clusters are searched again on ``finer`` (only near them), each from its coarse
+    eigenvectors, shifted to its coarse exponents: the continuation converges in a few
+    Arnoldi steps (a cold search of a strongly mixed cluster runs to the last checkpoint
+    without meeting its quota). Where the finer lattice
     resolves a cluster, its exponents replace the coarse ones (each exponent keeps its own
     ``order``); where it does not either, the cluster is confirmed when its largest real
     part is negative at both orders and changes by less than ``1 / TRUNCATION_SAFETY`` of
@@ -39,7 +42,7 @@ def confirm_unresolved(
     if centres.size == 0:
         out.info["confirmed"] = {"order": finer.order, "clusters": 0, "replaced": 0, "confirmed": 0}
         return out
-    fine = lattice_exponents(system, finer, near=centres)
+    fine = lattice_exponents(system, finer, near=centres, start=out)
     fields = (
         "exponents", "bounds", "truncation", "edge", "centroid", "dominant", "certified",
         "centre", "unresolved", "order", "uncertainty", "radius",
@@ -105,11 +108,17 @@ def confirm_unresolved(
     out.related = [r for r, k in zip(out.related, keep, strict=True) if k] + [
         r for r, t in zip(fine.related, take, strict=True) if t
     ]
+    # the coarse vectors do not live on the finer lattice: a later refinement starts afresh
+    # from these (the kept ones are dropped)
+    kept: list[np.ndarray | None] = [None] * int(keep.sum())
+    out.vectors = kept + [v for v, t in zip(fine.vectors, take, strict=True) if t]
+    out.indices = fine.indices
     out.split_gap = _split_gaps(out.exponents, finer.indices, system.omega)
     out.info["confirmed"] = {
         "order": finer.order,
         "clusters": int(centres.size),
         "replaced": replaced,
         "confirmed": confirmed,
+        "warm_starts": int(fine.info.get("warm_starts", 0)),
     }
     return out

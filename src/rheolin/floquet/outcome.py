@@ -38,6 +38,12 @@ class LatticeExponents:
     info: dict[str, Any] = field(default_factory=dict)
     related: list[list[complex]] = field(default_factory=list)
     radius: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    #: balanced first-order eigenvectors on ``indices`` (None for a conjugate copy): start
+    #: vectors for a search on a finer lattice
+    vectors: list[np.ndarray | None] = field(default_factory=list, repr=False)
+    indices: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    #: the time-averaged modes (``_Averaged``) the search started from
+    modes: Any = field(default=None, repr=False)
 
     @property
     def complete(self) -> bool:

@@ -19,7 +19,7 @@ from .averaged import _Averaged
 from .checks import _gershgorin, _Outer, _split_gaps, liouville_sum
 from .outcome import LatticeExponents
 from .result import _EPS, SAFETY, TRUNCATION_SAFETY
-from .select import ACCEPT_WEIGHT, CENTRED, _Candidate, _clusters, _count, _select
+from .select import ACCEPT_WEIGHT, CENTRED, CLUSTER_TOL, _Candidate, _clusters, _count, _select
 
 __all__ = ["ARNOLDI_STEPS", "ARNOLDI_TOL", "SPLU", "UNRESOLVED_EDGE", "lattice_exponents"]
 
@@ -47,17 +47,25 @@ ARNOLDI_TOL = 1e-10
 DGKS = 0.7071
 
 
+#: A warm-started search ends when every coarse eigenvector has a converged Ritz vector at
+#: least this close (|cos| of the angle between them).
+WARM_OVERLAP = 0.5
+
+
 def lattice_exponents(
     system: PeriodicSystem,
     lattice: Lattice,
     *,
     near: np.ndarray | None = None,
+    start: LatticeExponents | None = None,
 ) -> LatticeExponents:
     """Representatives of the Floquet exponents of ``system`` on ``lattice``.
 
     See the module docstring for the method. ``near`` restricts the search to the
     time-averaged modes nearest these values (for tracking one exponent across speeds); the
-    result is then partial (``expected`` is the number of those modes).
+    result is then partial (``expected`` is the number of those modes). ``start``: the
+    representatives of a coarser lattice of the same system; each cluster's search starts from
+    its eigenvectors there (a few Arnoldi steps instead of a full run).
     """
     t0 = time.perf_counter()
     n, w = system.n, system.omega
@@ -65,7 +73,7 @@ def lattice_exponents(
     nh = H.size
     if 0 not in set(H.tolist()):
         raise ValueError("the lattice must contain harmonic 0")
-    avg = _Averaged(system)
+    avg = start.modes if start is not None and start.modes is not None else _Averaged(system)
     hill = LatticeHill(system, H)
     sq_rep, sv_rep = np.tile(avg.sq, nh), np.tile(avg.sv, nh)
     Mconv = hill.inner.Mconv()
@@ -152,6 +160,10 @@ def lattice_exponents(
         cluster = clusters[cid]
         sigma = complex(np.mean(lam0[cluster]))
         need = quotas[cid]
+        warm, at = _warm_start(start, H, n, sigma, w, rng)
+        if warm is not None:
+            sigma = at  # where the coarse exponents are: their continuations converge first
+            warm_starts.append(cid)
         t1 = time.perf_counter()
         lu = _factor(hill, sigma, w, many=True)
         sigma = lu.sigma
@@ -169,6 +181,8 @@ def lattice_exponents(
         mix = rng.standard_normal(cluster.size) + 1j * rng.standard_normal(cluster.size)
         v0[centre * n : (centre + 1) * n] = avg.X[:n, cluster] @ mix
         v0[n * nh + centre * n : n * nh + (centre + 1) * n] = avg.X[n:, cluster] @ mix
+        if warm is not None:
+            v0 = warm.sum(axis=1) + 1e-2 * v0 / np.linalg.norm(v0)
         # a little of everything: an exact eigenvector would end the Krylov space at once
         v0 += 1e-3 * (rng.standard_normal(size) + 1j * rng.standard_normal(size)) / np.sqrt(size)
         t2 = time.perf_counter()
@@ -191,9 +205,18 @@ def lattice_exponents(
                 c for c in pool if c.centroid <= CENTRED and joint.intersection(c.families)
             ]
             satisfied[0] = _count(_select(cands, quota, w, nh)) >= sum(quota.values())
+            if not satisfied[0] and warm is not None:
+                # a warm start ends when each coarse eigenvector has its continuation: a
+                # converged Ritz vector close to it (a mixed cluster's quota may never be
+                # met by centred copies)
+                unit = vecs / np.linalg.norm(vecs, axis=0)
+                overlap = np.abs(warm_unit.conj().T @ unit).max(axis=1)
+                return bool(np.all(overlap >= WARM_OVERLAP))
             return satisfied[0]
 
         satisfied = [False]
+        if warm is not None:
+            warm_unit = warm / np.linalg.norm(warm, axis=0)
         _arnoldi(apply, v0, accept, steps=ARNOLDI_STEPS, tol=ARNOLDI_TOL)
         arnoldi_seconds += time.perf_counter() - t2
         for c in found_here:
@@ -205,6 +228,7 @@ def lattice_exponents(
         return found_here
 
     short: list[complex] = []
+    warm_starts: list[int] = []
     done: dict[int, int] = {}  # clusters whose search met its quota: their quotas
     clusters = _clusters(lam0, targets, w)
     quotas = {
@@ -253,6 +277,7 @@ def lattice_exponents(
     normA, normB = spla.norm(A_b, 1), spla.norm(B_b, 1)
     del A_b
     lams, bounds, trunc, edges, cents, doms, partners = [], [], [], [], [], [], []
+    vectors: list[np.ndarray | None] = []
     certified: list[bool] = []
     centres: list[complex] = []
     spread: list[float] = []
@@ -286,6 +311,7 @@ def lattice_exponents(
         part = _partner(c, H, n, avg.WB, conj_index)
         for lam_i in [c.lam, np.conj(c.lam)] if conj_too else [c.lam]:
             lams.append(complex(lam_i))
+            vectors.append(xb if lam_i == c.lam else None)
             bounds.append(bound)
             trunc.append(tau)
             edges.append(c.edge)
@@ -314,6 +340,7 @@ def lattice_exponents(
         "arnoldi_seconds": arnoldi_seconds,
         "seconds": time.perf_counter() - t0,
         "short_searches": [complex(x) for x in short],
+        "warm_starts": len(warm_starts),
         "certified_modes": np.concatenate(
             [lam0[clusters[c]] for c in skipped] + [np.zeros(0, complex)]
         ),
@@ -343,7 +370,46 @@ def lattice_exponents(
         ),
         liouville=liouville_sum(system),
         info=info,
+        vectors=vectors,
+        indices=H,
+        modes=avg,
     )
+
+
+def _warm_start(
+    start: LatticeExponents | None,
+    H: np.ndarray,
+    n: int,
+    sigma: complex,
+    w: float,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray | None, complex]:
+    """The coarse eigenvectors of the cluster centred at ``sigma``, moved onto the harmonics
+    ``H`` with random weights, one per column, and the mean of their exponents (None: none
+    known)."""
+    if start is None or not start.vectors:
+        return None, sigma
+    tol = CLUSTER_TOL * max(abs(sigma), w)
+    Hc = start.indices
+    pos = np.searchsorted(H, Hc)
+    if np.any(pos >= H.size) or np.any(H[np.minimum(pos, H.size - 1)] != Hc):
+        return None, sigma  # not a sub-lattice
+    nh, nc = H.size, Hc.size
+    cols = (pos[:, None] * n + np.arange(n)).ravel()
+    mine = [
+        i
+        for i, (z, v) in enumerate(zip(start.centre, start.vectors, strict=True))
+        if v is not None and abs(z - sigma) <= tol
+    ]
+    if not mine:
+        return None, sigma
+    picked = [v for v in (start.vectors[i] for i in mine) if v is not None]
+    out = np.zeros((2 * n * nh, len(picked)), dtype=complex)
+    for j, v in enumerate(picked):
+        c = complex(rng.standard_normal(), rng.standard_normal())
+        out[cols, j] = c * v[: n * nc]
+        out[n * nh + cols, j] = c * v[n * nc :]
+    return out / np.linalg.norm(out), complex(np.mean(start.exponents[mine]))
 
 
 def _arnoldi(
