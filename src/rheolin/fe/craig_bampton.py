@@ -24,7 +24,10 @@ bearings or joints in the model. A body clamped by ``fixed`` DOFs has none.
 Spinning bodies (``spin_axis``): the reduced Coriolis matrix ``G = Y^T (M E - E M) Y``
 (per unit speed, ``E`` the cross product with the axis on every FE translation) and the
 centrifugal matrix ``C = Y^T M E^2 Y`` (per unit speed squared) are kept; the model turns the
-body-frame equations into the inertial frame (:mod:`rheolin.mechanics.condensed`).
+body-frame equations into the inertial frame (:mod:`rheolin.mechanics.condensed`). For a free
+body, ``C`` also holds the centrifugal stress stiffening of its rigid motions, so that a
+condensed rigid body spins exactly as Euler's equations say (:func:`_rigid_stress_stiffening`);
+that of its elastic modes is not modelled.
 """
 
 from __future__ import annotations
@@ -43,7 +46,7 @@ import scipy.sparse.linalg as spla
 from ..errors import ModelError
 from ..io.atomic import atomic_write
 from ..linalg.direct import analyze, resolve_backend
-from .coupling import Coupling, coupling_transform, rigid_map
+from .coupling import Coupling, coupling_transform, rigid_map, skew
 from .matrices import FEModel
 
 __all__ = ["CondensedFE", "condense"]
@@ -248,6 +251,8 @@ def condense(
         G = Yd.T @ MEY - (Yd.T @ MEY).T  # Y^T (M E - E^T M) Y, E^T = -E
         C = -(E @ Yd).T @ (fe.M @ (E @ Yd))  # Y^T M E^2 Y = -(E Y)^T M (E Y)
         C = 0.5 * (C + C.T)
+        if rigid:
+            C = C + _rigid_stress_stiffening(red["M"], C, positions, axis)
     rec = rec_dofs = None
     if recover is not None:
         rec_dofs = np.asarray(recover, dtype=np.int64).ravel()
@@ -315,15 +320,60 @@ def _fixed_interface_modes(
     return lam, Phi
 
 
+def _rigid_motions(positions: np.ndarray, n: int, about: np.ndarray) -> np.ndarray:
+    """``R`` (``n x 6``): the reduced coordinates of a rigid motion of the body (translation,
+    rotation about ``about``): each interface node moves rigidly, the modal amplitudes stay 0."""
+    R = np.zeros((n, 6))
+    for j, x in enumerate(positions):
+        R[6 * j : 6 * j + 3] = rigid_map(x[None, :], about)
+        R[6 * j + 3 : 6 * j + 6, 3:] = np.eye(3)
+    return R
+
+
+def _rigid_stress_stiffening(
+    M: np.ndarray, C: np.ndarray, positions: np.ndarray, axis: np.ndarray
+) -> np.ndarray:
+    """Centrifugal stress stiffening of a free spinning body, on its rigid motions only
+    (per unit speed squared; docs/large-models.md).
+
+    The spin softening ``W^2 C`` alone softens a rigid rotation about the axis by
+    ``W^2 I_p`` and a tilt by ``W^2 x`` the second moment along the axis; the centrifugal
+    prestress turning with the body cancels that. Rigid-body mechanics in the spinning frame
+    (Euler's equations linearized about a steady spin about a principal axis ``e`` through the
+    mass centre) gives the stiffness per unit ``W^2``: ``-m P`` on translations
+    (``P = I - e e^T``) and ``Z J Z + I_p P`` on rotations about the mass centre (``Z = [e]x``,
+    ``J`` the inertia tensor there, ``I_p = e^T J e``): no stiffness for the rotation about the
+    axis, ``I_p - I_d`` for a tilt. The correction ``S = M R A^-1 (K_rigid - R^T C R) A^-1 R^T M``
+    (``A = R^T M R``) makes ``R^T (C + S) R = K_rigid`` exactly and leaves every motion
+    mass-orthogonal to the rigid ones alone: the stress stiffening of the elastic modes is not
+    modelled (it matters for thin disks or blades spinning near their first frequencies).
+    """
+    n = M.shape[0]
+    R0 = _rigid_motions(positions, n, np.zeros(3))
+    A0 = R0.T @ M @ R0
+    m = float(np.trace(A0[:3, :3]) / 3)
+    cx = -A0[:3, 3:] / m  # t^T A_tr theta = -m t . (c x theta)
+    centre = np.array([cx[2, 1], cx[0, 2], cx[1, 0]])
+    R = _rigid_motions(positions, n, centre)
+    A = R.T @ M @ R
+    J = A[3:, 3:]
+    Z = skew(axis)
+    P = np.eye(3) - np.outer(axis, axis)
+    want = np.zeros((6, 6))
+    want[:3, :3] = -m * P
+    want[3:, 3:] = Z @ J @ Z + float(axis @ J @ axis) * P
+    delta = want - R.T @ C @ R
+    MR = M @ R
+    X = np.linalg.solve(A, MR.T)  # A^-1 R^T M
+    S = X.T @ delta @ X
+    return 0.5 * (S + S.T)
+
+
 def _rigid_body_cleanup(
     Kr: np.ndarray, Mr: np.ndarray, positions: np.ndarray, n_modes: int
 ) -> tuple[np.ndarray, int]:
     """Detect the six rigid-body modes of a free body and remove the round-off from ``K``."""
-    origin = positions.mean(axis=0)
-    R = np.zeros((Kr.shape[0], 6))
-    for j, x in enumerate(positions):
-        R[6 * j : 6 * j + 3] = rigid_map(x[None, :], origin)
-        R[6 * j + 3 : 6 * j + 6, 3:] = np.eye(3)
+    R = _rigid_motions(positions, Kr.shape[0], positions.mean(axis=0))
     if np.linalg.norm(Kr @ R) > 1e-8 * np.linalg.norm(Kr) * np.linalg.norm(R):
         return Kr, 0  # restrained (clamped DOFs): no rigid-body motion
     P = np.eye(Kr.shape[0]) - R @ np.linalg.solve(R.T @ Mr @ R, R.T @ Mr)
