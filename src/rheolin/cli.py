@@ -39,6 +39,7 @@ from ._cli_errors import (
     set_kept,
     sigterm_as_interrupt,
 )
+from ._cli_frf import register as _register_frf
 from ._cli_report import parse_speed, parse_speeds, print_summary
 from ._cli_ross import register as _register_ross
 from .harmonics import TruncationWarning
@@ -515,7 +516,6 @@ def demo(out: Path = DEMO_OUT) -> None:
                 "1500:4500:500rpm",
                 "--out",
                 str(out / "sweep"),
-                "--no-stability-map",
             ]
         ),
     )
@@ -524,6 +524,7 @@ def demo(out: Path = DEMO_OUT) -> None:
 
 _register_ross(app)
 _register_condense(app)
+_register_frf(app)
 
 
 def _invoke(args: list[str]) -> int:
