@@ -433,13 +433,13 @@ def campbell(
     if smap is not None:
         written.append(out_dir / "stability_map.nc")
     table = Table(title=f"critical speeds of {escape(model.name)} (order-line crossings)")
-    for col in ("order", "mode", "whirl", "speed (rpm)", "frequency (Hz)"):
+    for col in ("order", "mode", "kind", "speed (rpm)", "frequency (Hz)"):
         table.add_column(col, justify="right" if "(" in col or col == "mode" else "left")
     for c in result.critical_speeds:
         table.add_row(
             escape(c.order),
             str(c.mode),
-            c.whirl,
+            c.kind or c.whirl,
             f"{c.speed * 30 / np.pi:.1f}",
             f"{c.frequency / (2 * np.pi):.2f}",
         )

@@ -108,3 +108,57 @@ def test_standstill_modes_are_the_non_spinning_closed_form() -> None:
     from rheolin._cli_report import parse_speeds
 
     assert parse_speeds("0:1000:500rpm", allow_zero=True)[0] == 0.0
+
+
+# --------------------------------------------------------------------------- labels, tracking
+def _two_disk_rotor() -> Model:
+    """Friswell et al. (2010) Example 5.9.1 (ROSS's rotor_example): a 1.5 m steel shaft of
+    50 mm, disks of 280 and 350 mm x 70 mm at 0.5 and 1.0 m, isotropic 1 MN/m bearings at
+    the ends (undamped)."""
+    m = Model()
+    m.add_shaft("rotor", np.linspace(0.0, 1.5, 7), outer_diameter=0.05, elastic_modulus=211e9,
+                density=7810.0, shear_modulus=81.2e9)  # fmt: skip
+    for node, d in ((2, 0.28), (4, 0.35)):
+        m.add_disk("rotor", node, outer_diameter=d, width=0.07, density=7810.0)
+    for node in (0, 6):
+        m.add_bearing(f"b{node}", "rotor", node, stiffness=1e6)
+    return m
+
+
+def test_two_disk_rotor_modes_labelled_and_tracked_across_speed() -> None:
+    """0-10,000 rpm: each tracked lateral branch keeps one whirl direction (exactly +-1 on
+    this isotropic rotor) and changes its frequency smoothly, although sorting by frequency
+    swaps forward and backward branches where they cross; the modes labelled torsional and
+    axial are those of the torsion-only and axial-only eigenproblems (phiz and uz DOFs of
+    M_0, K_0 alone: uncoupled from bending on an axisymmetric rotor)."""
+    import scipy.linalg as sla
+
+    model = _two_disk_rotor()
+    W = np.linspace(0.0, 10000.0, 51) * np.pi / 30
+    r = campbell(model, W)
+    assert r.tracked and r.kind is not None
+    spinning = W > 0
+    lateral = [j for j in range(r.frequency.shape[1]) if str(r.kind[1, j]).startswith("lateral ")]
+    assert len(lateral) >= 6
+    for j in lateral[:6]:
+        signs = np.sign(r.whirl_ratio[spinning, j])
+        assert np.all(signs == signs[0]), (j, r.kind[:, j])
+        assert np.all(np.abs(np.abs(r.whirl_ratio[spinning, j]) - 1) < 1e-6)
+        f = r.frequency[:, j]
+        assert np.all(np.abs(np.diff(f)) < 0.1 * f[1:]), j
+    for j in range(12):  # every tracked branch keeps its kind (torsional crossed by bending)
+        assert len(set(r.kind[spinning, j].tolist())) == 1, (j, set(r.kind[spinning, j]))
+    plain = campbell(model, W, track=False)
+    swaps = [j for j in range(12) if len(set(plain.kind[spinning, j].tolist())) > 1]
+    assert len(swaps) >= 4  # sorted branches swap: the tracking above is not trivially true
+    # torsional and axial labels against the uncoupled eigenproblems
+    a = model.assemble(3000 * np.pi / 30)
+    K, M = a.system.K[0].toarray(), a.system.M[0].toarray()
+    i = W.searchsorted(3000 * np.pi / 30)
+    for comp, kind in (("phiz", "torsional"), ("uz", "axial")):
+        dofs = [k for k, lab in enumerate(a.dof_labels) if lab[2] == comp]
+        lam = sla.eigh(K[np.ix_(dofs, dofs)], M[np.ix_(dofs, dofs)], eigvals_only=True)
+        ref = np.sqrt(lam[lam > 1e-6 * lam.max()])  # the free rigid motion excluded
+        got = np.sort(r.frequency[i][r.kind[i] == kind])
+        assert got.size == ref.size, (kind, got, ref)
+        assert np.allclose(got, ref, rtol=1e-8)

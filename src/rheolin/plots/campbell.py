@@ -14,6 +14,13 @@ __all__ = ["plot_campbell"]
 RPM = 60.0 / (2.0 * np.pi)  # rad/s -> rpm
 HZ = 1.0 / (2.0 * np.pi)  # rad/s -> Hz
 _COLORS = {"forward": "tab:blue", "backward": "tab:red", "mixed": "tab:purple", "none": "0.45"}
+#: Markers by the mode's kind (its first word), and their legend label ("" : by whirl).
+_MARKERS = {
+    "": ("o", ""),
+    "torsional": ("s", "torsional"),
+    "axial": ("^", "axial"),
+    "coupled": ("D", "coupled"),
+}
 
 
 def plot_campbell(
@@ -22,7 +29,8 @@ def plot_campbell(
     """Campbell diagram as a PNG.
 
     Top: damped natural frequencies [Hz] against input speed [rpm], one marker per mode and
-    speed, coloured by whirl (forward blue, backward red, mixed purple, no whirl grey); order
+    speed, coloured by whirl (forward blue, backward red, mixed purple, no whirl grey), shaped
+    by kind (circles lateral, squares torsional, triangles axial, diamonds coupled); order
     lines dashed (mesh orders red) and critical speeds circled (filled for forward whirl).
     Bottom: damping ratio of every branch (a negative value is a growing mode of the
     averaged system).
@@ -58,21 +66,22 @@ def plot_campbell(
     rpm = np.asarray(result.speeds) * RPM
     freq = np.asarray(result.frequency) * HZ
     labels = np.asarray(result.whirl)
+    kinds = np.asarray(result.kind if result.kind is not None else np.full(freq.shape, ""), str)
     shown = set()
     for kind, color in _COLORS.items():
-        mask = labels == kind
-        if not mask.any():
-            continue
-        speeds = np.broadcast_to(rpm[:, None], freq.shape)[mask]
-        ax.plot(
-            speeds,
-            freq[mask],
-            "o",
-            ms=3.5,
-            color=color,
-            label="no whirl" if kind == "none" else f"{kind} whirl",
-        )
-        shown.add(kind)
+        for shape, (marker, name) in _MARKERS.items():
+            mask = (labels == kind) & np.char.startswith(kinds, shape)
+            if shape == "":
+                mask = (labels == kind) & ~np.isin(
+                    np.char.partition(kinds, " ")[..., 0], [k for k in _MARKERS if k]
+                )
+            if not mask.any():
+                continue
+            speeds = np.broadcast_to(rpm[:, None], freq.shape)[mask]
+            label = name or ("no whirl" if kind == "none" else f"{kind} whirl")
+            ax.plot(speeds, freq[mask], marker, ms=3.5, color=color, ls="none",
+                    label=None if label in shown else label)  # fmt: skip
+            shown.add(label)
     for j in range(freq.shape[1]):
         ax.plot(rpm, freq[:, j], "-", lw=0.6, color="0.7", zorder=0)
     fmax = _default_fmax(freq, result) if fmax_hz is None else float(fmax_hz)

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from .modes import WHIRL_THRESHOLD, averaged_modes, whirl_ratio
+from .modes import WHIRL_THRESHOLD, averaged_modes, mac, mode_energy, mode_kind, whirl_ratio
 
 __all__ = ["CampbellResult", "CriticalSpeed", "campbell", "order_lines"]
 
@@ -28,6 +28,8 @@ class CriticalSpeed:
         Frequency at the crossing [rad/s].
     whirl
         ``"forward"``, ``"backward"``, ``"mixed"`` or ``"none"`` at the crossing.
+    kind
+        The branch's kind at the crossing (``"lateral forward"``, ``"torsional"``, ...).
     """
 
     order: str
@@ -35,6 +37,7 @@ class CriticalSpeed:
     speed: float
     frequency: float
     whirl: str
+    kind: str = ""
 
 
 @dataclass
@@ -54,6 +57,12 @@ class CampbellResult:
         ``{name: frequency per unit input speed}`` of the order lines.
     critical_speeds
         Crossings of branches with order lines, by speed.
+    kind
+        Per speed and branch: ``"lateral forward"``, ``"lateral backward"``, ``"lateral"``,
+        ``"torsional"``, ``"axial"`` or ``"coupled (...)"`` (:func:`~rheolin.stability.modes.
+        mode_kind`), ``""`` where a branch has no mode.
+    tracked
+        Branches follow each mode across speed by its shape (MAC); else sorted by frequency.
     """
 
     speeds: np.ndarray
@@ -63,6 +72,8 @@ class CampbellResult:
     whirl_ratio: np.ndarray
     orders: dict[str, float]
     critical_speeds: list[CriticalSpeed] = field(default_factory=list)
+    kind: np.ndarray | None = None
+    tracked: bool = False
 
     @property
     def whirl(self) -> np.ndarray:
@@ -95,6 +106,15 @@ class CampbellResult:
                 "critical_order": (("critical",), np.array([c.order for c in crit], dtype=str)),
                 "critical_mode": (("critical",), np.array([c.mode for c in crit], dtype=int)),
                 "critical_whirl": (("critical",), np.array([c.whirl for c in crit], dtype=str)),
+                "critical_kind": (("critical",), np.array([c.kind for c in crit], dtype=str)),
+                "kind": (
+                    ("speed", "mode"),
+                    (
+                        self.kind.astype(str)
+                        if self.kind is not None
+                        else np.full(self.frequency.shape, "", dtype=str)
+                    ),
+                ),
             },
             coords={
                 "speed": self.speeds,
@@ -105,6 +125,7 @@ class CampbellResult:
         ds["speed"].attrs["units"] = "rad/s"
         ds["frequency"].attrs.update(units="rad/s", long_name="damped natural frequency")
         ds.attrs["title"] = "Campbell diagram of the time-averaged system"
+        ds.attrs["branches"] = "tracked by mode shape (MAC)" if self.tracked else "sorted"
         return ds
 
 
@@ -149,15 +170,20 @@ def campbell(
     *,
     n_modes: int | None = None,
     method: str = "auto",
+    track: bool = True,
 ) -> CampbellResult:
     """Campbell diagram of a :class:`~rheolin.mechanics.Model` over input speeds.
 
     At every speed the model is assembled and the oscillatory modes of the time-averaged
     system ``M_0 q'' + D_0 q' + K_0 q = 0`` (gyroscopic and circulatory terms included) are
-    computed; each mode gets its damped frequency, damping ratio, logarithmic decrement and
-    whirl direction (:func:`~rheolin.stability.modes.whirl_ratio`). Branches are the modes
-    sorted by frequency. Crossings of the branches with the order lines (:func:`order_lines`)
-    are the critical speeds.
+    computed; each mode gets its damped frequency, damping ratio, logarithmic decrement,
+    whirl direction (:func:`~rheolin.stability.modes.whirl_ratio`) and kind (lateral forward
+    or backward, torsional, axial, coupled: by where its kinetic energy sits,
+    :func:`~rheolin.stability.modes.mode_kind`). Branches follow each mode from speed to speed
+    by the modal assurance criterion of its shape (``track=True``; a forward and a backward
+    branch that cross keep their identities), else they are the modes sorted by frequency.
+    Crossings of the branches with the order lines (:func:`order_lines`) are the critical
+    speeds.
 
     Parameters
     ----------
@@ -200,22 +226,81 @@ def campbell(
         modes = averaged_modes(a.system, n_modes, method=method)
         axes = {b: model.bodies[b].axis for b in model.bodies}
         ratio = whirl_ratio(modes.shapes, a.dof_labels, axes, a.plan.spin)
-        rows.append((modes, ratio))
-    width = max(m.eigenvalues.size for m, _ in rows)
+        energy = mode_energy(modes.shapes, a.dof_labels, axes, a.system.M[0])
+        rows.append((modes, ratio, mode_kind(energy, ratio)))
+    width = max(m.eigenvalues.size for m, _, _ in rows)
     if n_modes is not None:
         width = min(width, int(n_modes))
     shape = (speeds.size, width)
     freq, zeta, delta, whirl = (np.full(shape, np.nan) for _ in range(4))
-    for i, (m, r) in enumerate(rows):
-        j = min(m.eigenvalues.size, width)
-        freq[i, :j] = m.frequency[:j]
-        zeta[i, :j] = m.damping_ratio[:j]
-        delta[i, :j] = m.log_decrement[:j]
-        whirl[i, :j] = r[:j]
+    kind = np.full(shape, "", dtype=object)
+    picks = _track([m for m, _, _ in rows], width) if track else None
+    for i, (m, r, k) in enumerate(rows):
+        if picks is None:
+            sel = np.arange(min(m.eigenvalues.size, width))
+            cols = sel
+        else:
+            cols = np.flatnonzero(picks[i] >= 0)
+            sel = picks[i][cols]
+        freq[i, cols] = m.frequency[sel]
+        zeta[i, cols] = m.damping_ratio[sel]
+        delta[i, cols] = m.log_decrement[sel]
+        whirl[i, cols] = r[sel]
+        kind[i, cols] = k[sel]
     orders = order_lines(model)
-    result = CampbellResult(speeds, freq, zeta, delta, whirl, orders)
+    result = CampbellResult(
+        speeds, freq, zeta, delta, whirl, orders, kind=kind, tracked=picks is not None
+    )
     result.critical_speeds = _crossings(result)
     return result
+
+
+#: Tracking: the weight of the relative frequency change against ``1 - MAC`` in the cost of
+#: pairing a mode with a branch (shapes decide; frequency breaks ties of degenerate pairs).
+FREQUENCY_WEIGHT = 0.2
+
+
+def _track(modes: list[Any], width: int) -> list[np.ndarray]:
+    """For every speed, the mode index each branch takes (-1: none): the first speed's modes
+    by frequency, then each next speed's paired with the branches by the least total
+    ``1 - MAC`` against the branch's last shape (plus :data:`FREQUENCY_WEIGHT` x the relative
+    frequency change; Hungarian assignment). Modes left over fill free branches."""
+    from scipy.optimize import linear_sum_assignment
+
+    first = modes[0]
+    k0 = min(first.eigenvalues.size, width)
+    pick = np.full(width, -1)
+    pick[:k0] = np.arange(k0)
+    out = [pick]
+    shapes = np.full((first.shapes.shape[0], width), np.nan + 0j)
+    shapes[:, :k0] = first.shapes[:, :k0]
+    freqs = np.full(width, np.nan)
+    freqs[:k0] = first.frequency[:k0]
+    for m in modes[1:]:
+        live = np.flatnonzero(np.isfinite(freqs))
+        k = m.eigenvalues.size
+        pick = np.full(width, -1)
+        if live.size and k:
+            cost = 1.0 - mac(shapes[:, live], m.shapes)
+            scale = np.maximum(np.abs(freqs[live])[:, None], np.abs(m.frequency)[None, :])
+            cost += (
+                FREQUENCY_WEIGHT
+                * np.abs(freqs[live][:, None] - m.frequency[None, :])
+                / (np.maximum(scale, 1e-300))
+            )
+            r, c = linear_sum_assignment(cost)
+            pick[live[r]] = c
+        taken = set(pick[pick >= 0].tolist())
+        free = [b for b in range(width) if pick[b] < 0]
+        for j in sorted(set(range(k)) - taken, key=lambda j: m.frequency[j]):
+            if not free:
+                break
+            pick[free.pop(0)] = j
+        for b in np.flatnonzero(pick >= 0):
+            shapes[:, b] = m.shapes[:, pick[b]]
+            freqs[b] = m.frequency[pick[b]]
+        out.append(pick)
+    return out
 
 
 def _crossings(r: CampbellResult) -> list[CriticalSpeed]:
@@ -233,9 +318,12 @@ def _crossings(r: CampbellResult) -> list[CriticalSpeed]:
                     wr = r.whirl_ratio[i, mode] + t * (
                         r.whirl_ratio[i + 1, mode] - r.whirl_ratio[i, mode]
                     )
+                    kind = ""
+                    if r.kind is not None:
+                        kind = str(r.kind[i + 1, mode] if t > 0.5 else r.kind[i, mode])
                     out.append(
                         CriticalSpeed(
-                            name, mode, float(ws), float(ratio * ws), _whirl_label(float(wr))
+                            name, mode, float(ws), float(ratio * ws), _whirl_label(float(wr)), kind
                         )
                     )
     return sorted(out, key=lambda c: (c.speed, c.order))

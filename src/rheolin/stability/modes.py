@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.linalg as sla
@@ -17,7 +18,7 @@ import scipy.sparse.linalg as spla
 from ..hill import hill_pencil, state_scaling
 from ..system import PeriodicSystem
 
-__all__ = ["AveragedModes", "averaged_modes", "whirl_ratio"]
+__all__ = ["AveragedModes", "averaged_modes", "mac", "mode_energy", "mode_kind", "whirl_ratio"]
 
 #: Above this first-order size the averaged modes are found by shift-invert.
 DENSE_MODES_LIMIT = 1200
@@ -27,6 +28,12 @@ DENSE_MODES_LIMIT = 1200
 RIGID_MODE_RTOL = 1e-5
 #: ``|whirl ratio|`` above this is called forward or backward whirl.
 WHIRL_THRESHOLD = 0.5
+#: A mode with at least this share of its kinetic energy in one kind of motion (lateral,
+#: torsional, axial) is labelled by it; below, it is ``coupled``.
+KIND_SHARE = 0.8
+#: The kinds of motion, in the order of :func:`mode_energy`'s columns.
+KINDS = ("lateral", "torsional", "axial", "other")
+_COMPONENTS = ("ux", "uy", "uz", "phix", "phiy", "phiz")
 
 
 @dataclass
@@ -201,3 +208,88 @@ def whirl_ratio(
             0.0,
         )
     return np.asarray(ratio)
+
+
+def mode_energy(
+    shapes: np.ndarray,
+    dof_labels: Sequence[tuple[str, int, str]],
+    axes: Mapping[str, np.ndarray],
+    M0: Any,
+) -> np.ndarray:
+    """Share of each mode's kinetic energy in lateral, torsional, axial and other motion.
+
+    Per node, with its body's axis ``e``: the translation along ``e`` is axial, the rotation
+    about ``e`` torsional, the rest (transverse translations and tilts) lateral, each weighted
+    by the node's 3 x 3 translational and rotational blocks of ``M0`` (``x^H M x`` of that part);
+    DOFs without a node (modal DOFs of condensed bodies) are ``other``. Returns ``(n_modes, 4)``
+    in the order of :data:`KINDS`, rows summing to 1.
+
+    >>> labels = [("s", 0, c) for c in ("ux", "uy", "uz", "phix", "phiy", "phiz")]
+    >>> X = np.array([[0, 0, 0, 0, 0, 1.0], [1.0, 0, 0, 0, 0, 0]]).T  # a twist, a bending
+    >>> mode_energy(X, labels, {"s": np.array([0, 0, 1.0])}, np.eye(6)).round(3).tolist()
+    [[0.0, 1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]]
+    """
+    M = sp.csr_array(M0) if sp.issparse(M0) else np.asarray(M0)
+
+    def block(r: np.ndarray) -> np.ndarray:
+        if sp.issparse(M):
+            return np.asarray(M[r][:, r].toarray())
+        return np.asarray(M[np.ix_(r, r)])
+
+    index = {lab: i for i, lab in enumerate(dof_labels)}
+    energy = np.zeros((shapes.shape[1], len(KINDS)))
+    seen = np.zeros(len(dof_labels), dtype=bool)
+    for body, node in sorted({(b, i) for b, i, c in dof_labels if c in _COMPONENTS}):
+        e = np.asarray(axes[body], dtype=float)
+        P = np.eye(3) - np.outer(e, e)
+        for comps, along in ((_COMPONENTS[:3], 2), (_COMPONENTS[3:], 1)):
+            rows = [index.get((body, node, c)) for c in comps]
+            if any(r is None for r in rows):
+                continue
+            r = np.array(rows, dtype=int)
+            seen[r] = True
+            X, W = shapes[r, :], block(r)
+            for part, col in ((np.outer(e, e) @ X, along), (P @ X, 0)):
+                energy[:, col] += np.real(np.einsum("im,ij,jm->m", part.conj(), W, part))
+    rest = np.flatnonzero(~seen)
+    if rest.size:
+        X, W = shapes[rest, :], block(rest)
+        energy[:, 3] += np.real(np.einsum("im,ij,jm->m", X.conj(), W, X))
+    energy = np.maximum(energy, 0.0)
+    total = energy.sum(axis=1, keepdims=True)
+    return np.asarray(energy / np.where(total > 0, total, 1.0))
+
+
+def mode_kind(energy: np.ndarray, whirl: np.ndarray) -> np.ndarray:
+    """Labels from :func:`mode_energy` and :func:`whirl_ratio`: ``"lateral forward"``,
+    ``"lateral backward"``, ``"lateral"`` (no whirl: a non-spinning body, or mixed),
+    ``"torsional"``, ``"axial"``, or ``"coupled (lateral+torsional)"`` etc. (no kind holds
+    :data:`KIND_SHARE` of the energy; the two largest are named).
+
+    >>> mode_kind(np.array([[0.95, 0.05, 0, 0], [0.5, 0.45, 0.05, 0]]), np.array([-1.0, 0.0]))
+    array(['lateral backward', 'coupled (lateral+torsional)'], dtype=object)
+    """
+    out = np.empty(energy.shape[0], dtype=object)
+    for m, (row, r) in enumerate(zip(energy, whirl, strict=True)):
+        k = int(np.argmax(row))
+        if row[k] >= KIND_SHARE:
+            label = KINDS[k]
+            if label == "lateral" and np.isfinite(r) and abs(r) >= WHIRL_THRESHOLD:
+                label += " forward" if r > 0 else " backward"
+            out[m] = label
+        else:
+            a, b = np.argsort(-row, kind="stable")[:2]
+            out[m] = f"coupled ({KINDS[int(a)]}+{KINDS[int(b)]})"
+    return out
+
+
+def mac(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Modal assurance criterion ``|a_i^H b_j|^2 / (|a_i|^2 |b_j|^2)`` of the columns.
+
+    >>> mac(np.eye(2), np.array([[1.0, 1.0], [0.0, 1.0]])).round(2).tolist()
+    [[1.0, 0.5], [0.0, 0.5]]
+    """
+    num = np.abs(a.conj().T @ b) ** 2
+    na = np.sum(np.abs(a) ** 2, axis=0)
+    nb = np.sum(np.abs(b) ** 2, axis=0)
+    return np.asarray(num / np.maximum(np.outer(na, nb), 1e-300))
