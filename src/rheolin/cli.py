@@ -40,6 +40,7 @@ from ._cli_errors import (
     sigterm_as_interrupt,
 )
 from ._cli_frf import register as _register_frf
+from ._cli_modes import register as _register_modes
 from ._cli_report import parse_speed, parse_speeds, print_summary
 from ._cli_ross import register as _register_ross
 from .harmonics import TruncationWarning
@@ -525,6 +526,7 @@ def demo(out: Path = DEMO_OUT) -> None:
 _register_ross(app)
 _register_condense(app)
 _register_frf(app)
+_register_modes(app)
 
 
 def _invoke(args: list[str]) -> int:
