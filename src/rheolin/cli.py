@@ -30,6 +30,7 @@ from rich.table import Table
 
 from . import __version__
 from ._cli_condense import register as _register_condense
+from ._cli_critical import register as _register_critical
 from ._cli_errors import (
     EXIT_FAILED,
     ContractGroup,
@@ -526,6 +527,7 @@ def demo(out: Path = DEMO_OUT) -> None:
 _register_ross(app)
 _register_condense(app)
 _register_frf(app)
+_register_critical(app)
 _register_modes(app)
 
 

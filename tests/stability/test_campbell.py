@@ -162,3 +162,51 @@ def test_two_disk_rotor_modes_labelled_and_tracked_across_speed() -> None:
         got = np.sort(r.frequency[i][r.kind[i] == kind])
         assert got.size == ref.size, (kind, got, ref)
         assert np.allclose(got, ref, rtol=1e-8)
+
+
+# --------------------------------------------------------------------------- critical-speed map
+def test_critical_speed_map_of_a_rigid_rotor_is_the_closed_form() -> None:
+    """A rigid rotor (m, I_d, I_p) on one bearing: the translation critical speed follows
+    ``sqrt(k / m)`` as the map varies k; the tilt, held by the bearing's fixed rotational
+    stiffness k_t, stays at the forward synchronous ``sqrt(k_t / (I_d - I_p))``."""
+    from rheolin.stability.critical_map import critical_speed_map
+
+    mass, Id, Ip, kt = 20.0, 0.5, 0.2, 4e5
+    m = Model()
+    m.add_rigid_body("rotor", (0, 0, 0), mass, (Id, Id, Ip))
+    m.add_bearing("b", "rotor", 0, [1e6, 1e6, 1e6, kt, kt, 0.0], components=None)
+    k = np.logspace(4, 8, 5)
+    r = critical_speed_map(m, k)
+    tilt = np.sqrt(kt / (Id - Ip))
+    for i, ki in enumerate(k):
+        ref = np.sort([np.sqrt(ki / mass), tilt])
+        np.testing.assert_allclose(r.speeds[i, :2], ref, rtol=1e-10)
+        assert np.isnan(r.speeds[i, 2])  # nothing else whirls forward (torsion is free)
+    assert r.actual == {"b": 1e6}
+
+
+def test_critical_speed_map_limits_and_the_campbell_crossings() -> None:
+    """The two-disk rotor: at its own bearing stiffness the map's critical speeds are the
+    Campbell diagram's forward 1x crossings (modes over a speed grid, interpolated: another
+    computation); a plain steel shaft on ever stiffer bearings tends to the pinned-pinned
+    Euler-Bernoulli critical speed (pi / L)^2 sqrt(EI / rho A) (Timoshenko: slightly below)."""
+    from rheolin.stability.critical_map import critical_speed_map
+
+    model = _two_disk_rotor()
+    r = critical_speed_map(model, [1e6])
+    W = np.linspace(500.0, 3500.0, 301) * np.pi / 30
+    camp = campbell(model, W)
+    fwd = sorted(
+        c.speed for c in camp.critical_speeds if c.order == "1x rotor" and c.whirl == "forward"
+    )
+    assert len(fwd) == 2
+    np.testing.assert_allclose(r.speeds[0, :2], fwd, rtol=2e-4)
+    L, d, E, rho = 1.0, 0.02, 210e9, 7850.0
+    shaft = Model()
+    shaft.add_shaft("s", np.linspace(0.0, L, 21), outer_diameter=d, elastic_modulus=E,
+                    density=rho, poisson_ratio=0.3)  # fmt: skip
+    for node in (0, 20):
+        shaft.add_bearing(f"b{node}", "s", node, stiffness=1e6)
+    stiff = critical_speed_map(shaft, [1e11]).speeds[0, 0]
+    eb = (np.pi / L) ** 2 * np.sqrt(E * (np.pi * d**4 / 64) / (rho * np.pi * d * d / 4))
+    assert 0.995 * eb < stiff < eb

@@ -9,7 +9,7 @@ import numpy as np
 
 from ._common import new_figure, save
 
-__all__ = ["plot_campbell"]
+__all__ = ["plot_campbell", "plot_critical_map"]
 
 RPM = 60.0 / (2.0 * np.pi)  # rad/s -> rpm
 HZ = 1.0 / (2.0 * np.pi)  # rad/s -> Hz
@@ -167,3 +167,37 @@ def _default_fmax(freq: np.ndarray, result: Any) -> float:
     lowest = np.sort(np.nanmax(np.where(np.isfinite(freq), freq, np.nan), axis=0))
     floor = float(lowest[min(1, lowest.size - 1)]) * 1.1
     return min(top * 1.08, max(1.25 * max(lines), floor))
+
+
+def plot_critical_map(result: Any, path: str | Path) -> Path:
+    """Undamped critical-speed map as a PNG: critical speeds [rpm] against bearing stiffness
+    [N/m], log-log, one line per critical speed; each bearing's own stiffness dashed.
+
+    >>> import numpy as np, tempfile, pathlib
+    >>> from rheolin.stability.critical_map import CriticalSpeedMap
+    >>> k = np.logspace(5, 9, 9)
+    >>> r = CriticalSpeedMap(k, np.column_stack([np.sqrt(k / 20), 300 + 0 * k]), ["b"], {"b": 1e7})
+    >>> plot_critical_map(r, pathlib.Path(tempfile.mkdtemp()) / "m.png").stat().st_size > 1000
+    True
+    """
+    fig, axes = new_figure(1, 1, (8, 6))
+    ax = axes[0, 0]
+    k = np.asarray(result.stiffness)
+    rpm = np.asarray(result.speeds) * RPM
+    for j in range(rpm.shape[1]):
+        if np.any(np.isfinite(rpm[:, j])):
+            ax.loglog(k, rpm[:, j], "-o", ms=3, lw=1.4, label=f"critical speed {j + 1}")
+    seen: set[float] = set()
+    for name, value in result.actual.items():
+        if value > 0 and round(value, 3) not in seen:
+            seen.add(round(value, 3))
+            ax.axvline(value, color="0.3", ls="--", lw=0.9)
+            ax.annotate(f"{name}: {value:.3g} N/m", (value, 0.02),
+                        xycoords=("data", "axes fraction"), rotation=90, fontsize=7,
+                        ha="right", va="bottom", color="0.3")  # fmt: skip
+    ax.set_xlabel("bearing stiffness [N/m] (isotropic, every bearing varied)")
+    ax.set_ylabel("undamped critical speed [rpm]")
+    ax.set_title("undamped critical-speed map (forward synchronous whirl)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8, loc="upper left")
+    return save(fig, path)

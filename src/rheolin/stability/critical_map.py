@@ -1,0 +1,256 @@
+"""Undamped critical-speed map: the synchronous critical speeds against bearing stiffness.
+
+The classical design chart of rotordynamics (API 684): every bearing's transverse stiffness is
+set to one value ``k`` (isotropic, no cross-coupling, no damping), and the speeds ``W`` where a
+mode whirls forward in step with the input shaft are found directly. With the time-averaged
+coefficients ``M``, ``K(W) = K_0 + W^2 K_2`` (spin softening) and the gyroscopic matrix
+``W G``, synchronous forward whirl ``q = x exp(i W t)`` needs
+
+    ( K_0 - W^2 (M - i G - K_2) ) x = 0,
+
+a generalized eigenproblem in ``W^2`` (real and positive for a conservative rotor). Damping and
+circulatory terms are left out (undamped map). Low ``k``: rigid-body modes on soft supports
+(``W`` grows as ``sqrt(k)``); high ``k``: the shaft's pinned-pinned bending criticals.
+
+>>> import numpy as np
+>>> from rheolin.mechanics import Model
+>>> m = Model()
+>>> m.add_shaft("s", [0.0, 0.25, 0.5], outer_diameter=0.05, material="steel")
+>>> m.add_disk("s", 1, mass=20.0, inertia=[0.2, 0.2, 0.1])
+>>> for k in (0, 2):
+...     m.add_bearing(f"b{k}", "s", k, stiffness=1e6)
+>>> cmap = critical_speed_map(m, [1e5, 1e6])
+>>> cmap.speeds.shape
+(2, 4)
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.linalg as sla
+
+from ..errors import ModelError
+
+__all__ = ["CriticalSpeedMap", "critical_speed_map", "synchronous_critical_speeds"]
+
+
+@dataclass
+class CriticalSpeedMap:
+    """Undamped synchronous critical speeds [rad/s] against bearing stiffness [N/m].
+
+    Attributes
+    ----------
+    stiffness
+        Bearing stiffness values, shape ``(n_k,)``.
+    speeds
+        The lowest critical speeds at each stiffness, shape ``(n_k, n_modes)`` (NaN: fewer).
+    bearings
+        The bearings whose transverse stiffness was set.
+    actual
+        ``{bearing: its own transverse stiffness}`` (the mean of its two transverse direct
+        terms), to mark the operating point on the map.
+    """
+
+    stiffness: np.ndarray
+    speeds: np.ndarray
+    bearings: list[str]
+    actual: dict[str, float] = field(default_factory=dict)
+
+    def to_dataset(self) -> Any:
+        """The map as an ``xarray.Dataset`` (speeds in rpm).
+
+        >>> r = CriticalSpeedMap(np.array([1e6]), np.array([[100.0, 200.0]]), ["b"], {"b": 1e6})
+        >>> r.to_dataset()["critical_speed"].dims
+        ('stiffness', 'mode')
+        """
+        import xarray as xr
+
+        return xr.Dataset(
+            {
+                "critical_speed": (
+                    ("stiffness", "mode"),
+                    self.speeds * 30 / np.pi,
+                    {"units": "rpm", "long_name": "undamped synchronous critical speed"},
+                ),
+                "actual_stiffness": (
+                    ("bearing",),
+                    [self.actual.get(b, np.nan) for b in self.bearings],
+                ),
+            },
+            coords={
+                "stiffness": ("stiffness", self.stiffness, {"units": "N/m"}),
+                "mode": np.arange(self.speeds.shape[1]),
+                "bearing": list(self.bearings),
+            },
+        )
+
+
+def _averaged_parts(model: Any) -> tuple[Any, ...]:
+    """``(M, K_0, K_2, G, T, assembled)`` of the time-averaged system, by speed
+    (``K = K_0 + W K_1 + W^2 K_2``, ``D = D_0 + W G``) from three assemblies, reduced by
+    ``T`` when the model has a free axial or torsional motion (held: no critical speed at 0)."""
+    from ..rigid_modes import find_rigid_modes
+
+    W = np.array([1.0, 2.0, 3.0])
+    built = [model.assemble(float(w)) for w in W]
+    mats = [b.system for b in built]
+
+    def dense(s: Any, name: str) -> np.ndarray:
+        x = getattr(s, name).get(0)
+        if x is None:
+            return np.zeros((s.n, s.n))
+        return np.asarray(x.toarray() if hasattr(x, "toarray") else x)
+
+    M = dense(mats[0], "M")
+    K = [dense(s, "K") for s in mats]
+    D = [dense(s, "D") for s in mats]
+    rigid = find_rigid_modes(mats[0])
+    T = np.eye(M.shape[0]) if rigid is None else rigid.transform().toarray()
+    M, K, D = T.T @ M @ T, [T.T @ k @ T for k in K], [T.T @ d @ T for d in D]
+    V = np.vander(W, 3, increasing=True)  # [1, W, W^2]
+    coef = np.linalg.solve(V, np.stack([k.ravel() for k in K]))
+    K0, K2 = coef[0].reshape(M.shape), coef[2].reshape(M.shape)
+    G = (D[1] - D[0]) / (W[1] - W[0])
+    return M, K0, K2, G, T, built[0]
+
+
+#: Critical speeds closer than this (relative) are one: the two planes of an isotropic rotor.
+SAME = 1e-6
+
+
+def synchronous_critical_speeds(model: Any, n_modes: int = 4) -> np.ndarray:
+    """The lowest undamped forward synchronous critical speeds [rad/s] of ``model`` (its
+    damping and circulatory terms left out; see the module docstring).
+
+    The eigenvalues ``W^2`` of the pencil come by QZ; those within ``1e-10 ||K_0|| / ||B||``
+    of zero are rigid-body motions (a free axial or torsional motion) and left out, and so
+    are solutions that cannot whirl forward: a backward branch crossing the 1x line (which
+    unbalance on isotropic supports does not excite), a torsional or axial mode. The two
+    planes of an isotropic rotor give one critical speed: within a group of (nearly) equal
+    roots the most forward combination is judged. A rigid rotor of mass ``m`` on two
+    bearings ``k`` at ``+-a`` from its centre: translation at ``sqrt(2 k / m)``, tilt at
+    ``sqrt(2 k a^2 / (I_d - I_p))`` (none when ``I_p >= I_d``).
+    """
+    M, K0, K2, G, T, built = _averaged_parts(model)
+    B = M - 1j * G - K2
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        mu, X = sla.eig(K0, B)
+    zero = 1e-10 * float(np.linalg.norm(K0, 1)) / max(float(np.linalg.norm(B, 1)), 1e-300)
+    ok = np.isfinite(mu) & (mu.real > zero) & (np.abs(mu.imag) <= 1e-6 * np.abs(mu))
+    mu, X = mu[ok].real, X[:, ok]
+    order = np.argsort(mu)
+    mu, X = mu[order], T @ X[:, order]
+    F, Bk = _whirl_maps(model, built)
+    out: list[float] = []
+    i = 0
+    while i < mu.size and len(out) < n_modes:
+        j = i + 1
+        while j < mu.size and mu[j] <= mu[i] * (1 + 2 * SAME):
+            j += 1
+        V = X[:, i:j]
+        f, b = F @ V, Bk @ V
+        Af, Ab = f.conj().T @ f, b.conj().T @ b
+        tot = Af + Ab
+        if np.trace(tot).real > 0:
+            ratio = sla.eigvals(Af - Ab, tot + 1e-300 * np.eye(tot.shape[0])).real
+            if np.nanmax(ratio) >= 0.5:
+                out.append(float(np.sqrt(mu[i])))
+        i = j
+    return np.array(out)
+
+
+def _whirl_maps(model: Any, built: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Linear maps from a shape to its forward and backward circles, node by node (the
+    transverse translations and tilts of spinning bodies; :func:`~rheolin.stability.modes.
+    whirl_ratio` is ``(|F x|^2 - |B x|^2) / (|F x|^2 + |B x|^2)``)."""
+    labels = built.dof_labels
+    index = {lab: i for i, lab in enumerate(labels)}
+    rows_f: list[np.ndarray] = []
+    rows_b: list[np.ndarray] = []
+    for body, node in sorted({(b, i) for b, i, _ in labels}):
+        s = built.plan.spin.get(body, 0)
+        if s == 0:
+            continue
+        e = np.asarray(model.bodies[body].axis, dtype=float)
+        a = np.cross(e, [1.0, 0.0, 0.0] if abs(e[0]) < 0.9 else [0.0, 1.0, 0.0])
+        a /= np.linalg.norm(a)
+        b = np.cross(e, a)
+        for kind in (("ux", "uy", "uz"), ("phix", "phiy", "phiz")):
+            found = [index.get((body, node, c)) for c in kind]
+            if any(r is None for r in found):
+                continue
+            rf = np.zeros(len(labels), complex)
+            rb = np.zeros(len(labels), complex)
+            cols = [int(r) for r in found if r is not None]
+            rf[cols] = a + 1j * b
+            rb[cols] = a - 1j * b
+            if s < 0:
+                rf, rb = rb, rf
+            rows_f.append(rf)
+            rows_b.append(rb)
+    if not rows_f:
+        z = np.zeros((0, len(labels)), complex)
+        return z, z
+    return np.array(rows_f), np.array(rows_b)
+
+
+def _ground_bearings(model: Any) -> list[str]:
+    out = []
+    for name, j in model.joints.items():
+        if j["other"][0] is None and j["table"] is None and np.abs(j["K"][:3, :3]).max() > 0:
+            out.append(name)
+    return out
+
+
+def critical_speed_map(
+    model: Any,
+    stiffness: Sequence[float] | np.ndarray,
+    *,
+    bearings: Sequence[str] | None = None,
+    n_modes: int = 4,
+) -> CriticalSpeedMap:
+    """Undamped critical speeds of ``model`` with the transverse stiffness of ``bearings``
+    (default: every bearing to ground with a translational stiffness) set to each value of
+    ``stiffness`` [N/m] in turn: isotropic across the bearing's body axis, no cross-coupling,
+    no damping; their axial and rotational terms are kept. The model itself is not changed.
+    """
+    k = np.asarray(stiffness, dtype=float).ravel()
+    if k.size == 0 or not np.all(np.isfinite(k)) or np.any(k <= 0):
+        raise ModelError("stiffness: need one or more finite values > 0 [N/m]")
+    names = _ground_bearings(model) if bearings is None else list(bearings)
+    for b in names:
+        if b not in model.joints:
+            raise ModelError(f"bearings: no bearing {b!r}; bearings: {list(model.joints)}")
+        if model.joints[b]["table"] is not None:
+            raise ModelError(f"bearings: {b!r} has speed-dependent coefficients (a table)")
+    if not names:
+        raise ModelError("bearings: the model has no bearing to ground to vary")
+    actual = {}
+    for b in names:
+        j = model.joints[b]
+        e = np.asarray(model.bodies[j["body"]].axis, float)
+        P = np.eye(3) - np.outer(e, e)
+        actual[b] = float(np.trace(P @ j["K"][:3, :3] @ P) / 2)
+    speeds = np.full((k.size, n_modes), np.nan)
+    for i, ki in enumerate(k):
+        m = copy.deepcopy(model)
+        for j in m.joints.values():
+            j["D"] = np.zeros((6, 6))
+        for b in names:
+            j = m.joints[b]
+            e = np.asarray(m.bodies[j["body"]].axis, float)
+            P = np.eye(3) - np.outer(e, e)
+            Kb = np.array(j["K"], dtype=float)
+            axial = np.outer(e, e) @ Kb[:3, :3] @ np.outer(e, e)
+            Kb[:3, :3] = ki * P + axial
+            Kb[:3, 3:] = 0.0
+            Kb[3:, :3] = 0.0
+            j["K"] = Kb
+        w = synchronous_critical_speeds(m, n_modes)
+        speeds[i, : w.size] = w
+    return CriticalSpeedMap(k, speeds, names, actual)
