@@ -226,8 +226,12 @@ class _Builder:
         for path, b in bodies:
             for i, d in enumerate(b.disks):
                 self._node(b.name, d.node, f"{path}.disks[{i}].node")
-                kw = d.model_dump(exclude={"node", "material"})
+                kw = d.model_dump(
+                    exclude={"node", "material", "balance_grade", "balance_speed", "balance_mass"}
+                )
                 kw["density"] = self._disk_density(d, f"{path}.disks[{i}]", b)
+                if d.balance_grade is not None:
+                    kw["unbalance"] = self._graded(d, kw["density"], f"{path}.disks[{i}]")
                 self._call(f"{path}.disks[{i}]", self.model.add_disk, b.name, d.node, **kw)
             for i, j in enumerate(b.bearings):
                 self._bearing(b.name, j, f"{path}.bearings[{i}]")
@@ -249,6 +253,26 @@ class _Builder:
             self._call("model.gravity", self.model.set_gravity, spec.model.gravity)
         self._call("meshes", self.model.speed_plan)  # kinematic consistency of the gear train
         return self.model
+
+    @staticmethod
+    def _graded(d: Any, density: float, path: str) -> float:
+        """The unbalance of a disk given by its ISO 21940-11 balance grade: the permissible
+        residual unbalance ``m G / W`` with ``m`` its ``balance_mass`` (the rotor mass the
+        grade is shared over; default the disk's own mass) and ``W`` its ``balance_speed``."""
+        from ..mechanics.balance import iso21940_unbalance
+
+        mass = d.balance_mass
+        if mass is None:
+            if d.mass is not None:
+                mass = d.mass
+            elif d.outer_diameter is not None and d.width is not None:
+                mass = density * np.pi / 4 * (d.outer_diameter**2 - d.inner_diameter**2) * d.width
+            else:
+                raise ModelError(f"{path}.balance_mass: required for a disk without its own mass")
+        try:
+            return iso21940_unbalance(d.balance_grade, mass, d.balance_speed)
+        except ModelError as exc:
+            raise ModelError(f"{path}.balance_grade: {exc}") from None
 
     @staticmethod
     def _disk_density(d: Any, path: str, body: Any) -> float:

@@ -13,7 +13,7 @@ from collections.abc import Callable, Sequence
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 
 from ..mechanics.sections import MATERIALS
 from .units import UnitError, to_si
@@ -201,6 +201,27 @@ class Disk(_Strict):
     couple_unbalance: CoupleUnbalanceNonNeg = 0.0
     couple_angle: Angle = 0.0
     axial_offset: Length = 0.0
+    balance_grade: str | None = None
+    balance_speed: SpeedPos | None = None
+    balance_mass: MassPos | None = None
+
+    @model_validator(mode="after")
+    def _balance(self) -> Disk:
+        if self.balance_grade is None:
+            if self.balance_speed is not None or self.balance_mass is not None:
+                raise ValueError("balance_speed and balance_mass need balance_grade")
+            return self
+        if self.unbalance:
+            raise ValueError(
+                "give either unbalance or balance_grade (the permissible residual unbalance "
+                "of ISO 21940-11), not both"
+            )
+        if self.balance_speed is None:
+            raise ValueError(
+                "balance_grade needs balance_speed, the rotor's maximum service speed "
+                "(e.g. '6000 rpm')"
+            )
+        return self
 
     @field_validator("inertia")
     @classmethod
