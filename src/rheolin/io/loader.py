@@ -204,7 +204,10 @@ class _Builder:
         self.spec = spec
         self.base = base
         self.nodes: dict[str, int] = {}
-        self.model = Model(input_body=spec.model.input_body)
+        self.model = Model(
+            input_body=spec.model.input_body,
+            unbalance_reference=spec.model.unbalance_reference,
+        )
 
     def build(self) -> Model:
         spec = self.spec

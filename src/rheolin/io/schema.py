@@ -416,6 +416,14 @@ class ModelInfo(_Strict):
     input_body: Name | None = None
     speed: SpeedPos | None = None
     gravity: VecAcceleration | None = None
+    unbalance_reference: list[float] | None = None
+
+    @field_validator("unbalance_reference")
+    @classmethod
+    def _reference(cls, value: list[float] | None) -> list[float] | None:
+        if value is not None and (len(value) != 3 or not all(np.isfinite(value)) or not any(value)):
+            raise ValueError("must be a nonzero direction [x, y, z] (global axes)")
+        return value
 
 
 class HarmonicsInfo(_Strict):

@@ -86,6 +86,8 @@ def model_to_toml(model: Any, path: str | Path | None = None) -> str:
     doc: dict[str, Any] = {"model": {}}
     if model.input_body is not None:
         doc["model"]["input_body"] = model.input_body
+    if model.unbalance_reference is not None:
+        doc["model"]["unbalance_reference"] = list(model.unbalance_reference)
     tables: dict[str, dict[str, Any]] = {}
     lists: dict[str, list[dict[str, Any]]] = {
         "shafts": [], "rigid_bodies": [], "condensed_bodies": [], "meshes": [], "forces": []

@@ -102,10 +102,24 @@ class Model:
     ----------
     input_body
         Body whose speed is the ``speed`` given to :meth:`assemble`; default: the first body.
+    unbalance_reference
+        The global direction that is angle 0 of every unbalance (projected onto each disk's
+        plane; :func:`~rheolin.mechanics.rigid.unbalance_reference`); default x (y for bodies
+        turning about x).
     """
 
-    def __init__(self, input_body: str | None = None) -> None:
+    def __init__(
+        self, input_body: str | None = None, unbalance_reference: Sequence[float] | None = None
+    ) -> None:
         self.input_body = input_body
+        self.unbalance_reference = (
+            None if unbalance_reference is None else tuple(float(v) for v in unbalance_reference)
+        )
+        ref = np.asarray(self.unbalance_reference or (1.0, 0.0, 0.0), dtype=float)
+        if ref.shape != (3,) or not np.all(np.isfinite(ref)) or not np.any(ref):
+            raise ModelError(
+                f"`unbalance_reference` must be a nonzero 3-vector, got {unbalance_reference!r}"
+            )
         self.bodies: dict[str, _Body] = {}
         self.joints: dict[str, dict[str, Any]] = {}
         self.meshes: dict[str, dict[str, Any]] = {}
@@ -450,9 +464,11 @@ class Model:
         else:
             raise ModelError("give `mass` and `inertia`, or `outer_diameter` and `width`")
         if unbalance:
-            rn = static_unbalance(rn, unbalance, unbalance_angle, axis=e)
+            rn = static_unbalance(rn, unbalance, unbalance_angle, axis=e,
+                                  reference=self.unbalance_reference)  # fmt: skip
         if couple_unbalance:
-            rn = _add_couple(rn, couple_unbalance, couple_angle, axis=e)
+            rn = _add_couple(rn, couple_unbalance, couple_angle, axis=e,
+                             reference=self.unbalance_reference)  # fmt: skip
         if node in b.disks and (mass is not None or outer_diameter is not None):
             raise ModelError(f"`node`: node {node} of body {body!r} already has a disk")
         if axial_offset:

@@ -251,24 +251,60 @@ def disk(
     return RigidNode(m, J, np.asarray(com, dtype=float))
 
 
-def _perp_direction(axis: object, angle: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Unit vectors ``(e, a, b)``: ``a`` at ``angle`` from a reference radial direction."""
+#: The global direction whose projection onto a disk's plane is its angle 0 (unbalance).
+UNBALANCE_REFERENCE = (1.0, 0.0, 0.0)
+#: ... and the one used instead for bodies turning about (nearly) that direction.
+UNBALANCE_REFERENCE_ALONG = (0.0, 1.0, 0.0)
+
+
+def unbalance_reference(axis: object, reference: object = None) -> np.ndarray:
+    """The radial unit vector at angle 0 about ``axis``: the projection of the global
+    ``reference`` direction (default :data:`UNBALANCE_REFERENCE`, x) onto the plane normal to
+    the axis; with the default, a body turning about x takes y. Angles run from it towards
+    ``axis x reference`` (right-handed about the spin axis).
+
+    >>> unbalance_reference([0, 0, 1]).tolist(), unbalance_reference([1, 0, 0]).tolist()
+    ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    """
     e = unit_axis(axis)
-    ref = np.eye(3)[int(np.argmin(np.abs(e)))]
+    given = reference is not None
+    ref = np.asarray(UNBALANCE_REFERENCE if reference is None else reference, dtype=float)
+    if ref.shape != (3,) or not np.all(np.isfinite(ref)) or np.linalg.norm(ref) == 0:
+        raise ModelError(f"`unbalance_reference` must be a nonzero 3-vector, got {reference!r}")
+    ref = ref / np.linalg.norm(ref)
+    if abs(float(ref @ e)) > np.cos(np.radians(1.0)):
+        if given:
+            raise ModelError(
+                f"`unbalance_reference` {np.round(ref, 6).tolist()} is along the spin axis "
+                f"{np.round(e, 6).tolist()} of a body with unbalance: choose a direction across it"
+            )
+        ref = np.asarray(UNBALANCE_REFERENCE_ALONG, dtype=float)
     x = ref - (ref @ e) * e
-    x /= np.linalg.norm(x)
+    return np.asarray(x / np.linalg.norm(x))
+
+
+def _perp_direction(
+    axis: object, angle: float, reference: object = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unit vectors ``(e, a, b)``: ``a`` at ``angle`` from the reference radial direction."""
+    e = unit_axis(axis)
+    x = unbalance_reference(e, reference)
     y = np.cross(e, x)
     a = np.cos(angle) * x + np.sin(angle) * y
     return e, a, np.cross(e, a)
 
 
 def static_unbalance(
-    node: RigidNode, mass_radius: float, angle: float = 0.0, axis: object = (0.0, 0.0, 1.0)
+    node: RigidNode,
+    mass_radius: float,
+    angle: float = 0.0,
+    axis: object = (0.0, 0.0, 1.0),
+    reference: object = None,
 ) -> RigidNode:
     """Add a static unbalance ``U = m_u r_u`` [kg m] at ``angle`` [rad] about ``axis``.
 
-    The radial reference direction (angle 0) is the global axis least aligned with ``axis``,
-    projected onto the plane normal to it (x for a z spin axis). The centre of mass moves by
+    Angle 0 is :func:`unbalance_reference` (the global x direction projected onto the plane
+    normal to the axis; y for a body turning about x). The centre of mass moves by
     ``U / m`` (the unbalance mass itself is neglected next to ``m``).
 
     >>> n = static_unbalance(RigidNode(2.0, [1, 1, 1]), 1e-3, np.pi / 2)
@@ -277,12 +313,16 @@ def static_unbalance(
     """
     if node.mass <= 0.0:
         raise ModelError("`node` must have a positive mass to carry a static unbalance")
-    _, a, _ = _perp_direction(axis, angle)
+    _, a, _ = _perp_direction(axis, angle, reference)
     return RigidNode(node.mass, node.inertia, node.com + float(mass_radius) / node.mass * a)
 
 
 def couple_unbalance(
-    node: RigidNode, couple: float, angle: float = 0.0, axis: object = (0.0, 0.0, 1.0)
+    node: RigidNode,
+    couple: float,
+    angle: float = 0.0,
+    axis: object = (0.0, 0.0, 1.0),
+    reference: object = None,
 ) -> RigidNode:
     """Add a couple (dynamic) unbalance ``U_c = m_u r_u l`` [kg m^2] as an inertia product.
 
@@ -294,6 +334,6 @@ def couple_unbalance(
     >>> float(n.inertia[0, 2])
     -0.001
     """
-    e, a, _ = _perp_direction(axis, angle)
+    e, a, _ = _perp_direction(axis, angle, reference)
     dJ = -float(couple) * (np.outer(a, e) + np.outer(e, a))
     return RigidNode(node.mass, node.inertia + dJ, node.com)
