@@ -185,6 +185,15 @@ def _joint_matrix(value: Any, components: list[str], kind: str, path: str) -> np
     )
 
 
+def _vec3(value: Any, path: str) -> list[float] | None:
+    """An offset: None, or 3 components (global x, y, z) [m]."""
+    if value is None:
+        return None
+    if len(value) != 3:
+        raise ModelError(f"{path}: must have 3 components (global x, y, z) [m]")
+    return [float(v) for v in value]
+
+
 def _one(value: Any) -> Any:
     """A one-entry list as its value (per shaft), a longer one as is (per element)."""
     return value[0] if isinstance(value, list) and len(value) == 1 else value
@@ -249,6 +258,7 @@ class _Builder:
             for key, n in (("force", 3), ("moment", 3)):
                 if len(kw[key]) != n:
                     raise ModelError(f"{p}.{key}: must have 3 components (global x, y, z)")
+            kw["offset"] = _vec3(f.offset, f"{p}.offset")
             self._call(
                 p, self.model.add_force, f.name, f.body, f.node, order=Fraction(f.order), **kw
             )
@@ -424,6 +434,8 @@ class _Builder:
             speeds=j.speeds,
             interpolation=j.interpolation,
             extrapolate=j.extrapolate,
+            offset=_vec3(j.offset, f"{p}.offset"),
+            other_offset=_vec3(j.other_offset, f"{p}.other_offset"),
         )
 
     def _mesh(self, m: Any, p: str) -> None:

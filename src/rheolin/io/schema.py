@@ -287,6 +287,8 @@ class Bearing(_Strict):
     speeds: VecSpeedNonNeg | None = None
     interpolation: Literal["cubic", "linear", "pchip", "akima", "smoothing"] = "cubic"
     extrapolate: bool = False
+    offset: VecLength | None = None
+    other_offset: VecLength | None = None
 
 
 class ShaftLayer(_Strict):
@@ -406,6 +408,7 @@ class Force(_Strict):
     order: Ratio = "0"
     phase: Angle = 0.0
     reference_body: Name | None = None
+    offset: VecLength | None = None
 
 
 class ModelInfo(_Strict):

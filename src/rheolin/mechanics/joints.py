@@ -85,13 +85,51 @@ def expand_matrix(
     return out
 
 
+def lever(offset: ArrayLike | None) -> np.ndarray | None:
+    """``T`` (6x6): the motion ``(u + phi x r, phi)`` of a point at ``offset`` ``r`` from a
+    node, rigidly attached to it, from the node's ``(u, phi)`` (None: no offset).
+
+    >>> lever([0.0, 0.0, 0.5]) @ [0, 0, 0, 1.0, 0, 0]  # a tilt about x moves the point in -y
+    array([ 0. , -0.5,  0. ,  1. ,  0. ,  0. ])
+    """
+    if offset is None:
+        return None
+    r = np.asarray(offset, dtype=float).ravel()
+    if r.shape != (3,) or not np.all(np.isfinite(r)):
+        raise ModelError(f"`offset` must be a finite 3-vector [m], got {offset!r}")
+    if not np.any(r):
+        return None
+    T = np.eye(6)
+    T[:3, 3:] = -np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+    return T
+
+
+def pair_block(
+    x: np.ndarray, two: bool, levers: tuple[np.ndarray | None, np.ndarray | None] = (None, None)
+) -> np.ndarray:
+    """A 6x6 joint matrix on the relative motion of its two attachment points, on the DOFs of
+    its node (``two=False``: to ground) or of both nodes: ``[[Ta^T x Ta, -Ta^T x Tb],
+    [-Tb^T x Ta, Tb^T x Tb]]`` with the :func:`lever` of each side (identity without one)."""
+    Ta, Tb = (np.eye(6) if t is None else t for t in levers)
+    if not two:
+        return x if levers[0] is None else Ta.T @ x @ Ta
+    if levers == (None, None):
+        return np.block([[x, -x], [-x, x]])
+    return np.block([[Ta.T @ x @ Ta, -Ta.T @ x @ Tb], [-Tb.T @ x @ Ta, Tb.T @ x @ Tb]])
+
+
 def _pair(
-    dofs_a: ArrayLike, dofs_b: ArrayLike | None, X: dict[int, np.ndarray]
+    dofs_a: ArrayLike,
+    dofs_b: ArrayLike | None,
+    X: dict[int, np.ndarray],
+    levers: tuple[np.ndarray | None, np.ndarray | None] = (None, None),
 ) -> tuple[np.ndarray, dict[int, np.ndarray]]:
     if dofs_b is None:
-        return np.asarray(dofs_a, dtype=np.int64), X
+        return np.asarray(dofs_a, dtype=np.int64), {
+            k: pair_block(x, False, levers) for k, x in X.items()
+        }
     dofs = np.concatenate([np.asarray(dofs_a), np.asarray(dofs_b)]).astype(np.int64)
-    return dofs, {k: np.block([[x, -x], [-x, x]]) for k, x in X.items()}
+    return dofs, {k: pair_block(x, True, levers) for k, x in X.items()}
 
 
 def joint_term(
@@ -155,12 +193,15 @@ def coupling_speed_term(
     spin: int = 0,
     axis: ArrayLike = (0.0, 0.0, 1.0),
     mass: np.ndarray | None = None,
+    levers: tuple[np.ndarray | None, np.ndarray | None] = (None, None),
 ) -> SpeedTerm:
     """:func:`coupling_term` as a polynomial in ``w1``: the circulatory stiffness of the
     rotating damping ``Rt C Rt'^T`` is its linear part, the rest is constant.
 
     ``nodes`` holds the DOFs of both nodes (``None``: ground); ``mass`` is an added mass on
-    the relative acceleration (seals, squeeze films), in the same axes as the stiffness.
+    the relative acceleration (seals, squeeze films), in the same axes as the stiffness;
+    ``levers`` the :func:`lever` of each side when the joint acts at points offset from the
+    nodes (inertial-frame joints).
 
     >>> t = coupling_speed_term((range(6), None), None, expand_matrix(2.0, ["ux", "uy"]), spin=1)
     >>> sorted(t.K), t.K[1][0][:2, :2] + 0.0
@@ -185,5 +226,5 @@ def coupling_speed_term(
     dofs, _ = _pair(dofs_a, dofs_b, {})
     for X in (K, D, M):
         for p in X:
-            X[p] = _pair(dofs_a, dofs_b, X[p])[1]
+            X[p] = _pair(dofs_a, dofs_b, X[p], levers)[1]
     return SpeedTerm(dofs, M=M, K=K, D=D)

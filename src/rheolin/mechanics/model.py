@@ -36,7 +36,7 @@ from .assembly import Assembled
 from .bearing_table import SpeedTable
 from .condensed import CondensedBody, load_condensed
 from .gears import rectangular_wave_coefficients
-from .joints import expand_matrix
+from .joints import expand_matrix, lever
 from .rigid import RigidNode, disk, static_unbalance
 from .rigid import couple_unbalance as _add_couple
 from .rotation import unit_axis
@@ -496,6 +496,8 @@ class Model:
         speeds: Sequence[float] | None = None,
         interpolation: str = "cubic",
         extrapolate: bool = False,
+        offset: Sequence[float] | None = None,
+        other_offset: Sequence[float] | None = None,
     ) -> None:
         """A bearing, seal or coupling from a node to ground (default) or to another body's node.
 
@@ -509,6 +511,12 @@ class Model:
         ``mass`` (a scalar is the same at every speed); they are interpolated by
         ``interpolation`` (see :class:`~rheolin.mechanics.bearing_table.SpeedTable`) and
         evaluated at the operating speed by every solver, Campbell diagram and stability map.
+
+        ``offset`` [m] (global axes) puts the bearing at a point that far from the node, rigidly
+        attached to it (a bearing seat beside a shaft node, a housing foot off its node): the
+        coefficients act on the point's motion ``u + phi x r``, which couples the node's
+        translations and tilts exactly; ``other_offset`` likewise on the other body's side.
+        Inertial-frame joints only (``frame=None``).
 
         >>> m = Model()
         >>> m.add_shaft("s", [0.0, 0.5], outer_diameter=0.05, material="steel")
@@ -527,6 +535,12 @@ class Model:
             self._node(self._body(other_body, "other_body"), other_node)
         if frame is not None:
             self._body(frame, "frame")
+        if frame is not None and (offset is not None or other_offset is not None):
+            raise ModelError("`offset`: only for joints in the inertial frame (frame=None)")
+        if other_offset is not None and other_body is None:
+            raise ModelError("`other_offset` needs `other_body` (a joint to ground has one side)")
+        lever(offset)  # checked: a finite 3-vector
+        lever(other_offset)
         table = None
         if speeds is None:
             K = expand_matrix(stiffness, components, "stiffness")
@@ -552,6 +566,8 @@ class Model:
             frame=frame,
             table=table,
             components=None if components is None else list(components),
+            offset=None if offset is None else [float(v) for v in offset],
+            other_offset=None if other_offset is None else [float(v) for v in other_offset],
         )
 
     def bearing_coefficients(
@@ -644,16 +660,23 @@ class Model:
         order: Fraction | int = 0,
         phase: float = 0.0,
         reference_body: str | None = None,
+        offset: Sequence[float] | None = None,
     ) -> None:
         """``F cos(order * W_ref t + phase)`` at a node, fixed in direction (global axes).
 
         ``order`` is relative to the speed of ``reference_body`` (default: ``body``); 0 is a
-        static force.
+        static force. ``offset`` [m]: the force acts at a point that far from the node, rigidly
+        attached to it; the node carries it with the moment ``r x F`` added.
         """
         self._new_item(name, self.forces)
         self._node(self._body(body, "body"), node)
         ref = body if reference_body is None else reference_body
         self._body(ref, "reference_body")
+        T = lever(offset)
+        if T is not None:  # F at r: the node's load is T^T (F, M) = (F, M + r x F)
+            moment = list(
+                T.T @ np.concatenate([np.asarray(force, float), np.asarray(moment, float)])
+            )[3:]
         self.forces[name] = dict(
             body=body,
             node=node,

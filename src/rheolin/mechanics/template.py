@@ -24,7 +24,7 @@ from .assembly import Assembled
 from .beam import beam_speed_term
 from .bearing_table import SpeedTable
 from .gears import gear_mesh_term, line_of_action
-from .joints import COMPONENTS, coupling_speed_term
+from .joints import COMPONENTS, coupling_speed_term, lever, pair_block
 from .loads import gravity_load, harmonic_force_term
 from .shaft import element_matrices
 from .speeds import SpeedPlan, propagate_speeds, speed_plan
@@ -145,14 +145,15 @@ class SpeedTemplate:
         terms = self._body_terms(model)
         self.joints: dict[str, SpeedTerm] = {}
         #: speed-dependent joints: name -> (table, |speed ratio| of its body, DOFs)
-        self.tables: dict[str, tuple[SpeedTable, float, np.ndarray]] = {}
+        self.tables: dict[str, tuple[SpeedTable, float, np.ndarray, tuple[Any, Any]]] = {}
         for name, j in model.joints.items():
             other = None if j["other"][0] is None else dof[j["other"]]
             frame = j["frame"]
             s = 0 if frame is None else plan.spin[frame]
             axis = (0.0, 0.0, 1.0) if frame is None else model.bodies[frame].axis
+            levers = (lever(j.get("offset")), lever(j.get("other_offset")))
             self.joints[name] = coupling_speed_term(
-                (dof[(j["body"], j["node"])], other), j["K"], j["D"], s, axis, j.get("M")
+                (dof[(j["body"], j["node"])], other), j["K"], j["D"], s, axis, j.get("M"), levers
             )
             table = j.get("table")
             if table is not None:  # zeros now: the pattern; values per speed in `system`
@@ -160,7 +161,7 @@ class SpeedTemplate:
                 jt = self.joints[name]
                 z = {0: {0: np.zeros((jt.dofs.size, jt.dofs.size))}}
                 self.joints[name] = SpeedTerm(jt.dofs, M=z, D=z, K=z)
-                self.tables[name] = (table, ratio, np.asarray(jt.dofs))
+                self.tables[name] = (table, ratio, np.asarray(jt.dofs), levers)
         self.meshes: dict[str, tuple[Term, np.ndarray, int]] = {}
         for (name, g), harmonic in zip(model.meshes.items(), plan.mesh, strict=True):
             w = _mesh_vector(model, g, plan)
@@ -234,7 +235,7 @@ class SpeedTemplate:
             c.freeze()
         self._slots = {
             name: {c.name: c.slots(d) for c in (self._M, self._D, self._K)}
-            for name, (_, _, d) in self.tables.items()
+            for name, (_, _, d, _) in self.tables.items()
         }
 
     def table_blocks(
@@ -243,10 +244,9 @@ class SpeedTemplate:
         """``(dofs, K, D, M)`` of every speed-dependent joint at input ``speed`` [rad/s]
         (blocks on the joint's DOFs, node-to-node pairs expanded)."""
         out = []
-        for _, (table, ratio, dofs) in self.tables.items():
+        for _, (table, ratio, dofs, levers) in self.tables.items():
             K, D, M = table.at(ratio * speed)
-            if dofs.size == 12:
-                K, D, M = (np.block([[x, -x], [-x, x]]) for x in (K, D, M))
+            K, D, M = (pair_block(x, dofs.size == 12, levers) for x in (K, D, M))
             out.append((dofs, K, D, M))
         return out
 
@@ -304,7 +304,7 @@ class SpeedTemplate:
             raise ModelError(f"`speed` must be a positive finite number, got {speed!r}")
         w1 = float(self.plan.base) * speed
         joints = {name: t.at(w1) for name, t in self.joints.items()}
-        for (name, (_, _, dofs)), (_, K, D, M) in zip(
+        for (name, (_, _, dofs, _)), (_, K, D, M) in zip(
             self.tables.items(), self.table_blocks(speed), strict=True
         ):
             joints[name] = Term(dofs, M={0: M}, D={0: D}, K={0: K})
