@@ -246,9 +246,14 @@ class _Builder:
                     kw["unbalance"] = self._graded(d, kw["density"], f"{path}.disks[{i}]")
                 self._call(f"{path}.disks[{i}]", self.model.add_disk, b.name, d.node, **kw)
             for i, j in enumerate(b.bearings):
-                self._bearing(b.name, j, f"{path}.bearings[{i}]")
+                if j.journal is None:
+                    self._bearing(b.name, j, f"{path}.bearings[{i}]")
         for i, m in enumerate(spec.meshes):
             self._mesh(m, f"meshes[{i}]")
+        for path, b in bodies:  # after the meshes: the sense each shaft turns is known
+            for i, j in enumerate(b.bearings):
+                if j.journal is not None:
+                    self._journal(b.name, j, f"{path}.bearings[{i}]")
         for i, f in enumerate(spec.forces):
             p = f"forces[{i}]"
             self._node(f.body, f.node, f"{p}.node", f"{p}.body")
@@ -436,6 +441,45 @@ class _Builder:
             extrapolate=j.extrapolate,
             offset=_vec3(j.offset, f"{p}.offset"),
             other_offset=_vec3(j.other_offset, f"{p}.other_offset"),
+        )
+
+    def _journal(self, body: str, j: Bearing, p: str) -> None:
+        """A plain journal bearing: its coefficient table over ``speeds`` by the short-bearing
+        theory, for the sense its shaft turns (from the gear train)."""
+        from ..mechanics.journal import journal_bearing_table
+
+        self._node(body, j.node, f"{p}.node")
+        g = j.journal
+        assert g is not None
+        if len(g.load_direction) != 3:
+            raise ModelError(f"{p}.journal.load_direction: must have 3 components (x, y, z)")
+        if any(w <= 0 for w in j.speeds or []):
+            raise ModelError(f"{p}.speeds: a journal bearing's film needs speeds > 0")
+        try:
+            rotation = -1 if self.model.speed_plan().ratios[body] < 0 else 1
+        except ModelError:
+            rotation = 1
+        try:
+            Ks, Cs = journal_bearing_table(
+                g.diameter, g.length, g.clearance, g.viscosity, g.load, j.speeds or [],
+                axis=list(self.model.bodies[body].axis), load_direction=g.load_direction,
+                rotation=rotation,
+            )  # fmt: skip
+        except ModelError as exc:
+            raise ModelError(f"{p}.journal: {exc}") from None
+        self._call(
+            p,
+            self.model.add_bearing,
+            j.name,
+            body,
+            j.node,
+            Ks,
+            Cs,
+            ["ux", "uy", "uz"],
+            speeds=j.speeds,
+            interpolation=j.interpolation,
+            extrapolate=j.extrapolate,
+            offset=_vec3(j.offset, f"{p}.offset"),
         )
 
     def _mesh(self, m: Any, p: str) -> None:

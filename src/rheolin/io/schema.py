@@ -269,6 +269,17 @@ def material_constant(table: Any, key: str) -> float | None:
 Components = Literal["all"] | list[Literal["ux", "uy", "uz", "phix", "phiy", "phiz"]]
 
 
+class Journal(_Strict):
+    """A plain journal bearing by the short-bearing theory (rheolin.mechanics.journal)."""
+
+    diameter: LengthPos
+    length: LengthPos
+    clearance: LengthPos
+    viscosity: Annotated[float, BeforeValidator(_quantity("viscosity", "+"))]
+    load: Annotated[float, BeforeValidator(_quantity("force", "+"))]
+    load_direction: list[float] = [0.0, -1.0, 0.0]
+
+
 class Bearing(_Strict):
     """``Model.add_bearing`` (the body is the enclosing shaft or rigid body).
 
@@ -289,6 +300,24 @@ class Bearing(_Strict):
     extrapolate: bool = False
     offset: VecLength | None = None
     other_offset: VecLength | None = None
+    journal: Journal | None = None
+
+    @model_validator(mode="after")
+    def _journal(self) -> Bearing:
+        if self.journal is None:
+            return self
+        if self.speeds is None:
+            raise ValueError(
+                "a journal bearing needs `speeds` (of its shaft), where its coefficients are "
+                "computed and between which they are interpolated"
+            )
+        if np.any(np.asarray(self.stiffness, dtype=object) != 0) or np.any(
+            np.asarray(self.damping, dtype=object) != 0
+        ):
+            raise ValueError("give either `journal` or `stiffness`/`damping`, not both")
+        if self.other_body is not None or self.frame is not None:
+            raise ValueError("a journal bearing goes from its shaft to ground (no other_body)")
+        return self
 
 
 class ShaftLayer(_Strict):

@@ -49,6 +49,7 @@ DIMENSIONS: dict[str, tuple[str, str]] = {
     "area": ("m**2", "1.2 cm^2"),
     "second_moment": ("m**4", "12 cm^4"),
     "frequency": ("Hz", "5 kHz"),
+    "viscosity": ("Pa*s", "0.03 Pa*s"),
     "dimensionless": ("", "0.3"),
 }
 
