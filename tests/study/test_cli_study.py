@@ -126,7 +126,7 @@ def test_ctrl_c_keeps_the_finished_chunks(band, uninterrupted, tmp_path):
     out = tmp_path / "out"
     proc = subprocess.Popen(
         command(band, out, *SWEEP, "--workers", "2"),
-        env=ENV,
+        env={**ENV, "RHEOLIN_TEST_PAUSE_CHUNK": "0.1"},  # the study outlasts the watcher
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,

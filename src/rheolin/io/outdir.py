@@ -26,6 +26,7 @@ import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
+from .._pause import pause
 from ..errors import ModelError
 
 __all__ = ["check_output_dir", "staged_output"]
@@ -125,6 +126,7 @@ def staged_output(out: str | Path, owned: Iterable[str]) -> Iterator[Path]:
             stage = target / _STAGE.format(name="", pid=os.getpid())
             stage.mkdir(parents=True)
         yield stage
+        pause("staging")  # fault injection for the kill tests (rheolin._pause)
         new = sorted(p.name for p in stage.iterdir() if p.is_file())
         target.mkdir(parents=True, exist_ok=True)
         for name in sorted(set(owned) | set(new)):  # the earlier run's files go first

@@ -31,6 +31,7 @@ from typing import Any
 
 import xarray as xr
 
+from .._pause import pause
 from ..errors import ModelError
 from ..io.atomic import atomic_write
 from ..results.dataset import netcdf_engine
@@ -183,6 +184,7 @@ class CheckpointStore(MemoryStore):
             n += 1
         write_chunk(ds, path)
         self._done.update(dict.fromkeys((int(p) for p in ds["point"].values), path))
+        pause("chunk")  # fault injection for the kill tests (rheolin._pause)
 
     def read_all(self) -> list[xr.Dataset]:
         """Every chunk, in memory (each point once)."""
