@@ -27,7 +27,7 @@ is what the constraint takes (the drive torque, the thrust): it is reported.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -35,6 +35,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .constraints import LinearConstraint
 from .system import PeriodicSystem
 
 __all__ = ["DENSE_LIMIT", "RIGID_TOL", "RigidModes", "find_rigid_modes"]
@@ -64,65 +65,19 @@ def _diagonal(x: Any) -> np.ndarray:
 
 
 @dataclass
-class RigidModes:
+class RigidModes(LinearConstraint):
     """Rigid-body modes ``R`` (``n x k``, ``R^T M_0 R = I``) and the constraint that holds them.
 
     ``pivots`` are the eliminated DOFs (one per mode, where no time-varying coefficient acts
-    when possible), ``keep`` the others; ``q[keep] = y`` and ``q[pivots] = G y``.
+    when possible), ``keep`` the others; ``q[keep] = y`` and ``q[pivots] = G y``
+    (:class:`~rheolin.constraints.LinearConstraint`).
     """
 
-    modes: np.ndarray
-    pivots: np.ndarray
-    keep: np.ndarray
-    G: np.ndarray
-    n: int
+    modes: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
     @property
     def count(self) -> int:
         return int(self.modes.shape[1])
-
-    def transform(self) -> sp.csr_array:
-        """``T`` (``n x (n - k)``) with ``q = T y``."""
-        m = self.keep.size
-        rows = [self.keep, np.repeat(self.pivots, m)]
-        cols = [np.arange(m), np.tile(np.arange(m), self.pivots.size)]
-        vals = [np.ones(m), self.G.ravel()]
-        T = sp.coo_array(
-            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), (self.n, m)
-        ).tocsr()
-        T.eliminate_zeros()
-        return T
-
-    def reduce(self, system: PeriodicSystem) -> PeriodicSystem:
-        """The constrained system ``T^T X(t) T``, ``T^T f(t)`` (same format, sparse or dense)."""
-        if system.n != self.n:
-            raise ValueError(f"the system has {system.n} DOFs, the rigid modes {self.n}")
-        T = self.transform()
-        Tt = T.T.tocsr()
-
-        def project(X: Any) -> Any:
-            if sp.issparse(X):
-                return sp.csc_array(Tt @ sp.csr_array(X) @ T)
-            return np.asarray(Tt @ np.asarray(Tt @ np.asarray(X).T).T)
-
-        coeffs = {
-            name: {k: project(X) for k, X in getattr(system, name).items()}
-            for name in ("M", "D", "K")
-        }
-        loads = {k: Tt @ np.asarray(v) for k, v in system.f.items()}
-        return PeriodicSystem(system.omega, f=loads, **coeffs)
-
-    def expand(self, Y: np.ndarray) -> np.ndarray:
-        """``q = T y`` along the last axis (coefficients ``(..., n - k) -> (..., n)``)."""
-        Y = np.asarray(Y)
-        out = np.zeros((*Y.shape[:-1], self.n), dtype=np.result_type(Y.dtype, float))
-        out[..., self.keep] = Y
-        out[..., self.pivots] = Y @ self.G.T
-        return out
-
-    def restrict(self, Q: np.ndarray) -> np.ndarray:
-        """``y = q[keep]`` (e.g. a warm start of the full system for the constrained one)."""
-        return np.asarray(Q)[..., self.keep]
 
     def mean_load(self, system: PeriodicSystem) -> np.ndarray:
         """``R^T f_0`` per mode: the mean load the constraint takes (the drive, the thrust)."""
@@ -276,4 +231,4 @@ def find_rigid_modes(system: PeriodicSystem) -> RigidModes | None:
     # C_P^T q_P + C_O^T q_O = 0  ->  q_P = G q_O
     G = -np.linalg.solve(C[pivots].T, C[keep].T)
     G[np.abs(G) <= 1e-14 * np.abs(G).max(initial=0.0)] = 0.0
-    return RigidModes(R, pivots, keep, G, n)
+    return RigidModes(pivots=pivots, keep=keep, G=G, n=n, modes=R)

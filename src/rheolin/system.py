@@ -105,6 +105,7 @@ class PeriodicSystem:
         D: Mapping[int, Matrix] | None = None,
         K: Mapping[int, Matrix] | None = None,
         f: Mapping[int, Any] | None = None,
+        constraint: Any = None,
     ) -> None:
         try:
             w = float(omega)
@@ -121,6 +122,9 @@ class PeriodicSystem:
         self.f = self._loads(f, n)
         if not (self.M or self.D or self.K):
             raise ModelError("the system is all zero: give at least one nonzero M, D or K")
+        #: exact constraints between DOFs (rigid links; :class:`~rheolin.constraints.
+        #: LinearConstraint`): every analysis eliminates them and answers on all DOFs
+        self.constraint = constraint
 
     # ------------------------------------------------------------------ validation
     @staticmethod

@@ -127,6 +127,8 @@ def floquet(
     allowed = ("auto", "dense", "sparse", "lattice")
     if method not in allowed:
         raise ValueError(f"`method` must be one of {list(allowed)}, got {method!r}")
+    if system.constraint is not None:  # rigid links: the exponents of the constrained system
+        system = system.constraint.reduce(system)
     rigid = find_rigid_modes(system)
     held = system if rigid is None else rigid.reduce(system)
     res = _floquet(held, harmonics, method, order, frequencies, k, max_shifts, memory_budget, near)

@@ -267,6 +267,15 @@ class _Builder:
             self._call(
                 p, self.model.add_force, f.name, f.body, f.node, order=Fraction(f.order), **kw
             )
+        for i, r in enumerate(spec.rigid_links):
+            p = f"rigid_links[{i}]"
+            self._node(r.body, r.node, f"{p}.node", f"{p}.body")
+            self._node(r.other_body, r.other_node, f"{p}.other_node", f"{p}.other_body")
+            comps = None if r.components in (None, "all") else list(r.components)
+            self._call(p, self.model.add_rigid_link, r.name, r.body, r.node, r.other_body,
+                       r.other_node, comps)  # fmt: skip
+        if spec.rigid_links:  # conflicts and loops are found when the links are resolved
+            self._call("rigid_links", self.model.speed_template)
         if spec.model.gravity is not None:
             self._call("model.gravity", self.model.set_gravity, spec.model.gravity)
         self._call("meshes", self.model.speed_plan)  # kinematic consistency of the gear train

@@ -465,6 +465,17 @@ class HarmonicsInfo(_Strict):
     max_order: float | None = Field(default=None, gt=0)
 
 
+class RigidLink(_Strict):
+    """``Model.add_rigid_link``: ``other_node`` follows ``node`` rigidly (eliminated)."""
+
+    name: Name
+    body: Name
+    node: Index
+    other_body: Name
+    other_node: Index
+    components: Components | None = None
+
+
 class ModelFile(_Strict):
     """The whole file."""
 
@@ -475,6 +486,7 @@ class ModelFile(_Strict):
     condensed_bodies: list[CondensedBody] = []
     meshes: list[Mesh] = []
     forces: list[Force] = []
+    rigid_links: list[RigidLink] = []
 
 
 def table_class(annotation: Any) -> Any:

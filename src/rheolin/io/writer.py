@@ -90,7 +90,8 @@ def model_to_toml(model: Any, path: str | Path | None = None) -> str:
         doc["model"]["unbalance_reference"] = list(model.unbalance_reference)
     tables: dict[str, dict[str, Any]] = {}
     lists: dict[str, list[dict[str, Any]]] = {
-        "shafts": [], "rigid_bodies": [], "condensed_bodies": [], "meshes": [], "forces": []
+        "shafts": [], "rigid_bodies": [], "condensed_bodies": [], "meshes": [], "forces": [],
+        "rigid_links": [],
     }  # fmt: skip
     for method, call in model.calls:
         if method == "add_shaft":
@@ -133,6 +134,8 @@ def model_to_toml(model: Any, path: str | Path | None = None) -> str:
             lists["meshes"].append(t)
         elif method == "add_force":
             lists["forces"].append(_args(call))
+        elif method == "add_rigid_link":
+            lists["rigid_links"].append(_args(call))
         elif method == "set_gravity":
             doc["model"]["gravity"] = _plain(np.asarray(call.get("gravity", (0.0, -9.81, 0.0))))
     for key, items in lists.items():

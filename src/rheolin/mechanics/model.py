@@ -36,7 +36,7 @@ from .assembly import Assembled
 from .bearing_table import SpeedTable
 from .condensed import CondensedBody, load_condensed
 from .gears import rectangular_wave_coefficients
-from .joints import expand_matrix, lever
+from .joints import COMPONENTS, expand_matrix, lever
 from .rigid import RigidNode, disk, static_unbalance
 from .rigid import couple_unbalance as _add_couple
 from .rotation import unit_axis
@@ -124,6 +124,7 @@ class Model:
         self.joints: dict[str, dict[str, Any]] = {}
         self.meshes: dict[str, dict[str, Any]] = {}
         self.forces: dict[str, dict[str, Any]] = {}
+        self.links: dict[str, dict[str, Any]] = {}
         self.gravity: np.ndarray | None = None
         #: ``(method, arguments)`` of every ``add_*``/``set_gravity`` call, in order.
         self.calls: list[tuple[str, dict[str, Any]]] = []
@@ -686,6 +687,46 @@ class Model:
             phase=float(phase),
             reference=ref,
         )
+
+    @_recorded
+    def add_rigid_link(
+        self,
+        name: str,
+        body: str,
+        node: int,
+        other_body: str,
+        other_node: int,
+        components: Sequence[str] | None = None,
+    ) -> None:
+        """An exact rigid connection: ``other_node`` follows ``node`` as if welded to it,
+        ``u_b = u_a + phi_a x (p_b - p_a)``, ``phi_b = phi_a`` (``components``: only those of
+        the other node's DOFs; None: all six). The constrained DOFs are eliminated from the
+        equations (:mod:`rheolin.constraints`), not tied by a stiff spring: a short massless
+        connecting piece, a keyed hub or a stiff coupling without ill-conditioning. Chains of
+        links are resolved; a DOF constrained twice is refused.
+
+        >>> m = Model()
+        >>> m.add_rigid_body("a", (0, 0, 0), 1.0, (1.0, 1.0, 1.0))
+        >>> m.add_rigid_body("b", (0, 0, 0.5), 1.0, (1.0, 1.0, 1.0))
+        >>> m.add_rigid_link("weld", "a", 0, "b", 0)
+        >>> m.assemble(1.0).system.constraint.pivots.size
+        6
+        """
+        self._new_item(name, self.links)
+        self._node(self._body(body, "body"), node)
+        self._node(self._body(other_body, "other_body"), other_node)
+        if (body, node) == (other_body, other_node):
+            raise ModelError("`other_node`: a rigid link needs two different nodes")
+        comps = list(COMPONENTS) if components is None else list(components)
+        bad = [c for c in comps if c not in COMPONENTS]
+        if bad or not comps or len(set(comps)) != len(comps):
+            raise ModelError(
+                f"`components` must be distinct names from {list(COMPONENTS)}, got {components!r}"
+            )
+        self.links[name] = dict(
+            body=body, node=int(node), other_body=other_body, other_node=int(other_node),
+            components=comps,
+        )  # fmt: skip
 
     @_recorded
     def set_gravity(self, gravity: Sequence[float] = (0.0, -9.81, 0.0)) -> None:

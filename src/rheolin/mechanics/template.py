@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import scipy.sparse as sp
 
+from ..constraints import LinearConstraint
 from ..errors import ModelError
 from ..system import PeriodicSystem
 from ._term import SpeedTerm, Term
@@ -142,6 +143,7 @@ class SpeedTemplate:
                 self.dof_labels += [(b.name, -1 - j, "mode") for j in range(modes)]
                 self.n_dof += modes
         dof = {key: 6 * v + np.arange(6) for key, v in self.node_index.items()}
+        self.constraint = _links(model, dof, self.n_dof)
         terms = self._body_terms(model)
         self.joints: dict[str, SpeedTerm] = {}
         #: speed-dependent joints: name -> (table, |speed ratio| of its body, DOFs)
@@ -295,6 +297,7 @@ class SpeedTemplate:
             D=self._D.at(w1, extra["D"]),
             K=self._K.at(w1, extra["K"]),
             f=f,
+            constraint=self.constraint,
         )
 
     def assemble(self, speed: float) -> Assembled:
@@ -334,6 +337,55 @@ def model_speed_plan(model: Model) -> SpeedPlan:
     ratios = propagate_speeds(inp, pairs, model.bodies, fixed)
     loads = [f["order"] * abs(ratios[f["reference"]]) for f in model.forces.values()]
     return speed_plan(inp, pairs, model.bodies, loads, fixed)
+
+
+def _links(model: Model, dof: dict[tuple[str, int], np.ndarray], n: int) -> LinearConstraint | None:
+    """The rigid links as one eliminated constraint ``q[pivots] = G q[keep]`` (chains of links
+    substituted; a DOF constrained twice, or a loop, refused naming the links)."""
+    if not model.links:
+        return None
+    slaves: dict[int, dict[int, float]] = {}
+    owner: dict[int, str] = {}
+    for name, link in model.links.items():
+        pa = model.bodies[link["body"]].positions[link["node"]]
+        pb = model.bodies[link["other_body"]].positions[link["other_node"]]
+        T = lever(np.asarray(pb, float) - np.asarray(pa, float))
+        T = np.eye(6) if T is None else T
+        ma, sb = dof[(link["body"], link["node"])], dof[(link["other_body"], link["other_node"])]
+        for comp in link["components"]:
+            c = COMPONENTS.index(comp)
+            s = int(sb[c])
+            if s in slaves:
+                raise ModelError(
+                    f"rigid links {owner[s]!r} and {name!r} both constrain "
+                    f"{link['other_body']} node {link['other_node']} {comp}"
+                )
+            slaves[s] = {int(ma[j]): float(T[c, j]) for j in range(6) if T[c, j] != 0.0}
+            owner[s] = name
+    for _ in range(len(slaves) + 1):  # chains: a master that is itself constrained
+        changed = False
+        for s, row in slaves.items():
+            if not any(m in slaves for m in row):
+                continue
+            new: dict[int, float] = {}
+            for m, v in row.items():
+                for m2, v2 in (slaves[m] if m in slaves else {m: 1.0}).items():
+                    new[m2] = new.get(m2, 0.0) + v * v2
+            slaves[s] = new
+            changed = True
+        if not changed:
+            break
+    if any(m in slaves for row in slaves.values() for m in row):
+        names = sorted({owner[s] for s in slaves})
+        raise ModelError(f"rigid links {names} form a loop: a node cannot follow itself")
+    pivots = np.array(sorted(slaves), dtype=np.int64)
+    keep = np.setdiff1d(np.arange(n), pivots)
+    col = {int(k): i for i, k in enumerate(keep)}
+    G = np.zeros((pivots.size, keep.size))
+    for i, s in enumerate(pivots):
+        for m, v in slaves[int(s)].items():
+            G[i, col[m]] += v
+    return LinearConstraint(pivots=pivots, keep=keep, G=G, n=n)
 
 
 def assemble_model(model: Model, speed: float) -> Assembled:

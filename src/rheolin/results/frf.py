@@ -275,6 +275,16 @@ def system_frequency_response(
     p = DEFAULT_ORDER if order is None else int(order)
     if p < 0:
         raise ModelError(f"order: must be >= 0, got {order}")
+    # inputs and outputs through the rigid links (eliminated): f_r = T^T f, q = T y
+    if system.constraint is not None:
+        T = system.constraint.transform()
+        system = system.constraint.reduce(system)
+        n = system.n
+        B_in = np.asarray(T.T.toarray()[:, inp], dtype=complex)
+        C_out = T.toarray()[out, :]
+    else:
+        B_in = np.eye(n, dtype=complex)[:, inp]
+        C_out = np.eye(n)[out, :]
     if system.time_invariant:
         lat: Lattice = harmonic_lattice({}, 0)
     else:
@@ -290,11 +300,8 @@ def system_frequency_response(
         )
     nh = lat.indices.size
     i0 = lat.position(0)
-    rhs = sp.csc_array(
-        (np.ones(inp.size, dtype=complex), (i0 * n + inp, np.arange(inp.size))),
-        shape=(n * nh, inp.size),
-    ).toarray()
-    rows = (np.arange(nh)[:, None] * n + out[None, :]).ravel()  # (h, output) in that order
+    rhs = np.zeros((n * nh, inp.size), dtype=complex)
+    rhs[i0 * n : (i0 + 1) * n] = B_in  # the inputs act at the excitation frequency
     boundary = lat.boundary
     resp = np.full((w.size, nh, out.size, inp.size), np.nan + 0j)
     worst = 0.0
@@ -315,7 +322,7 @@ def system_frequency_response(
             total = per.sum(axis=0)
             worst = max(worst, float(np.max(per[boundary].sum(axis=0) / np.maximum(total, 1e-300))))
         scale = wi * wi if unbalance else 1.0
-        resp[i] = scale * x[rows].reshape(nh, out.size, inp.size)
+        resp[i] = scale * np.einsum("oj,hji->hoi", C_out, x.reshape(nh, n, inp.size))
     info: dict[str, Any] = {
         "sparse_backend": name,
         "lattice_order": lat.order,

@@ -98,6 +98,8 @@ def lti_speeds(
                 basis.append(poly[name][p].ravel())
                 powers.append((order, p))
     B = np.array(basis, dtype=complex)  # (J, n^2)
+    link = getattr(template, "constraint", None)
+    Tc = None if link is None else link.transform().toarray()
     q = np.zeros((speeds.size, ns.size, n), dtype=complex)
     residual = np.zeros(speeds.size)
     weight = np.where(ns == 0, 1.0, 2.0)
@@ -114,9 +116,14 @@ def lti_speeds(
                     for j, sj in enumerate(sv[i]):
                         A[i, j][idx] += Kt + sj * Dt + sj * sj * Mt
         F = np.stack([_load(f_poly, loads, w, int(k), n) for k in ns], axis=1)
+        if Tc is not None:  # rigid links: eliminated (T^T A T y = T^T f, q = T y)
+            A = np.einsum("ia,...ij,jb->...ab", Tc, A, Tc)
+            F = F @ Tc
         with np.errstate(all="ignore"):
             Q = np.linalg.solve(A, F[..., None])[..., 0]
             R = F - (A @ Q[..., None])[..., 0]
+        if Tc is not None:
+            Q = Q @ Tc.T
         rn = np.sqrt(np.sum(weight * np.sum(np.abs(R) ** 2, axis=2), axis=1))
         fn = np.sqrt(np.sum(weight * np.sum(np.abs(F) ** 2, axis=2), axis=1))
         q[start : start + step] = Q

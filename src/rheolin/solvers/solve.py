@@ -134,6 +134,8 @@ def solve(
         stability=stability, options=options, backend=backend, sparse_backend=sparse_backend,
         memory_budget=memory_budget,
     )  # fmt: skip
+    if system.constraint is not None:  # rigid links: eliminated, the answer on every DOF
+        return _linked(system, hset, x0, again)
     # rigid-body modes: looked for once harmonic 0 turns out singular (the factorization of
     # A0(0) = K_0 says so at no cost); `direct` factorizes the coupled matrix instead, which
     # the modes' coupling can leave regular, so it looks first
@@ -188,6 +190,25 @@ def _constrained(
     sol.info["rigid_modes"] = rigid.count
     sol.info["rigid_dominant_dofs"] = rigid.dominant_dofs(system)
     sol.info["rigid_mean_load"] = [float(x) for x in rigid.mean_load(system)]
+    return sol
+
+
+def _linked(
+    system: PeriodicSystem,
+    hset: HarmonicSet,
+    x0: Solution | np.ndarray | None,
+    kwargs: dict[str, Any],
+) -> Solution:
+    """Solve with the system's exact constraints eliminated (:mod:`rheolin.constraints`);
+    the result is on every DOF of ``system``."""
+    c = system.constraint
+    if isinstance(x0, Solution):
+        x0 = dataclasses.replace(x0, q=c.restrict(x0.q))
+    elif x0 is not None:
+        x0 = c.restrict(np.asarray(x0))
+    sol = solve(c.reduce(system), hset, x0=x0, **kwargs)
+    sol.q = c.expand(sol.q)
+    sol.info["constrained_dofs"] = int(c.pivots.size)
     return sol
 
 

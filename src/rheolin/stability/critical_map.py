@@ -106,12 +106,17 @@ def _averaged_parts(model: Any) -> tuple[Any, ...]:
             return np.zeros((s.n, s.n))
         return np.asarray(x.toarray() if hasattr(x, "toarray") else x)
 
+    link = mats[0].constraint
+    Tc = np.eye(mats[0].n) if link is None else link.transform().toarray()
+    if link is not None:  # rigid links: eliminated
+        mats = [link.reduce(s) for s in mats]
     M = dense(mats[0], "M")
     K = [dense(s, "K") for s in mats]
     D = [dense(s, "D") for s in mats]
     rigid = find_rigid_modes(mats[0])
     T = np.eye(M.shape[0]) if rigid is None else rigid.transform().toarray()
     M, K, D = T.T @ M @ T, [T.T @ k @ T for k in K], [T.T @ d @ T for d in D]
+    T = Tc @ T  # from the reduced coordinates to every DOF
     V = np.vander(W, 3, increasing=True)  # [1, W, W^2]
     coef = np.linalg.solve(V, np.stack([k.ravel() for k in K]))
     K0, K2 = coef[0].reshape(M.shape), coef[2].reshape(M.shape)

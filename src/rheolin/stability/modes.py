@@ -107,6 +107,9 @@ def averaged_modes(
     >>> np.round(m.frequency, 4), np.round(m.damping_ratio, 4)
     (array([0.9999, 1.9999]), array([0.01, 0.01]))
     """
+    link = system.constraint
+    if link is not None:  # rigid links: the modes of the constrained system, on every DOF
+        system = link.reduce(system)
     avg = _averaged(system)
     n = avg.n
     if method == "auto":
@@ -134,6 +137,8 @@ def averaged_modes(
     if n_modes is not None:
         order = order[: int(n_modes)]
     lam, q = lam[order], vec[:n, order] / sq[:, None]
+    if link is not None:
+        q = link.expand(q.T).T
     with np.errstate(under="ignore"):
         q = q / np.maximum(np.linalg.norm(q, axis=0), np.finfo(float).tiny)
     return AveragedModes(lam, q, int(rigid.sum()))
