@@ -156,5 +156,5 @@ other_node = 0
     assert np.array_equal(ca.pivots, cb.pivots) and np.array_equal(ca.G, cb.G)
     assert ca.G[2, 4] == 0 and ca.G[0, 4] == pytest.approx(0.4)  # ux_b = ux_a + 0.4 phiy_a
     twice = text + text[text.index("[[rigid_links]]") :].replace('"weld"', '"again"')
-    with pytest.raises(ModelError, match="rigid_links.*'weld' and 'again'"):
+    with pytest.raises(ModelError, match=r"rigid_links.*'weld' and 'again'"):
         parse_model(twice)
