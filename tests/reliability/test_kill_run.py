@@ -19,7 +19,7 @@ import pytest
 import xarray as xr
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "study"))
-from study_cases import BAND
+from study_cases import BAND, ctrl_c_reaches_python
 
 ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
 
@@ -79,6 +79,7 @@ def test_killed_runs_leave_one_run_and_no_temporary_file(earlier, tmp_path, sig)
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
             text=True,
+            preexec_fn=ctrl_c_reaches_python,
         )
         if attempt == 0:
             # the first kill as soon as the new run stages its files, before it can move them

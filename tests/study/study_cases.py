@@ -57,3 +57,13 @@ def band_model(ky: float = 1.21e4, cx: float = 0.0) -> Model:
 def rpm(x: float) -> float:
     """rpm -> rad/s."""
     return x * np.pi / 30
+
+
+def ctrl_c_reaches_python() -> None:
+    """``preexec_fn`` of a child that must take Ctrl-C: SIGINT back to its default, so that
+    Python turns it into KeyboardInterrupt. A run started in the background of a
+    non-interactive shell (a CI script's ``cmd &``) inherits SIGINT ignored, and Python then
+    leaves it ignored: both Ctrl-C tests failed that way on a clean clone."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_DFL)

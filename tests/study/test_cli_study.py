@@ -20,7 +20,7 @@ from rheolin.study.chunks import floquet_results, read_chunk
 
 sys.path.insert(0, str(Path(__file__).parent))
 sys.path.insert(0, str(Path(__file__).parents[1] / "cli"))
-from study_cases import BAND
+from study_cases import BAND, ctrl_c_reaches_python
 from test_cli import ENV, cli
 
 SWEEP = ["--speeds", "850:1250:4rpm", "--chunk-size", "3"]  # 101 points, the band inside
@@ -131,6 +131,7 @@ def test_ctrl_c_keeps_the_finished_chunks(band, uninterrupted, tmp_path):
         stderr=subprocess.PIPE,
         text=True,
         start_new_session=True,
+        preexec_fn=ctrl_c_reaches_python,
     )
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and len(list(out.glob("checkpoint/chunk-*.nc"))) < 3:
