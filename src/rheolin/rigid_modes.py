@@ -194,6 +194,14 @@ def find_rigid_modes(system: PeriodicSystem) -> RigidModes | None:
     num = np.linalg.norm(np.asarray(Ks @ Vs), axis=0)
     den = np.linalg.norm(np.asarray(absK @ np.abs(Vs)), axis=0)
     rigid = num <= RIGID_TOL * den
+    # ... and in physical units: mass scaling hides the stiffness of (nearly) massless DOFs
+    # (a spring on a massless end node of a rigidly moving shaft would pass as free)
+    Kp = K0 if sparse else np.asarray(K0, float)
+    absKp = abs(sp.csr_array(Kp)) if sparse else np.abs(Kp)
+    Rp = s[:, None] * Vs
+    num_p = np.linalg.norm(np.asarray(Kp @ Rp), axis=0)
+    den_p = np.linalg.norm(np.asarray(absKp @ np.abs(Rp)), axis=0)
+    rigid &= num_p <= RIGID_TOL * den_p
     Vs = Vs[:, rigid]
     if Vs.shape[1] == 0:
         return None

@@ -170,3 +170,25 @@ def test_large_sparse_free_chain_is_held_after_harmonic_0_reports_singular():
     got = sol.q[list(sol.harmonics).index(1)]
     assert np.abs(got - want).max() < 1e-9 * np.abs(want).max()
     assert np.abs(sol.q[list(sol.harmonics).index(0)]).max() == 0.0
+
+
+def test_soft_springs_on_nearly_massless_nodes_are_not_free_motions() -> None:
+    """A very stiff, nearly massless shaft (E x 100, density 1e-6) carrying a 20 kg disk on two
+    soft springs: mass scaling had hidden the springs (they act on massless end nodes) and held
+    the lateral translations as rigid-body modes, answering zero. The lateral unbalance
+    response is the rigid-disk closed form ``U W^2 / (2 k - m W^2)``."""
+    from rheolin.mechanics import Model
+    from rheolin.results import solve_point
+
+    m, k, U, W = 20.0, 1e5, 1e-4, 40.0
+    model = Model()
+    model.add_shaft("s", [0.0, 0.2, 0.4], outer_diameter=0.08, elastic_modulus=2.1e13,
+                    density=1e-6, poisson_ratio=0.3)  # fmt: skip
+    model.add_disk("s", 1, mass=m, inertia=[0.5, 0.5, 0.2], unbalance=U)
+    for node in (0, 2):
+        model.add_bearing(f"b{node}", "s", node, stiffness=k)
+    p = solve_point(model, W, stability=False)
+    assert p.solution.success, p.solution.message
+    x = p.solution.harmonic(1)[p.assembled.dofs("s", 1)[0]]
+    ref = U * W**2 / (2 * k - m * W**2)
+    assert abs(2 * abs(x) - ref) < 1e-4 * ref  # the shaft's own compliance: 2k / 3e10 = 6e-6
