@@ -210,3 +210,16 @@ def test_critical_speed_map_limits_and_the_campbell_crossings() -> None:
     stiff = critical_speed_map(shaft, [1e11]).speeds[0, 0]
     eb = (np.pi / L) ** 2 * np.sqrt(E * (np.pi * d**4 / 64) / (rho * np.pi * d * d / 4))
     assert 0.995 * eb < stiff < eb
+
+
+def test_critical_speed_map_refuses_speed_dependent_bearings() -> None:
+    from rheolin.errors import ModelError
+    from rheolin.stability.critical_map import critical_speed_map
+
+    m = Model()
+    m.add_shaft("s", [0.0, 0.5], outer_diameter=0.05, material="steel")
+    m.add_bearing("a", "s", 0, 1e7)
+    m.add_bearing("t", "s", 1, stiffness=[1e7, 2e7], damping=[1.0, 2.0], speeds=[100.0, 300.0],
+                  interpolation="linear")  # fmt: skip
+    with pytest.raises(ModelError, match=r"\['t'\] have speed-dependent coefficients"):
+        critical_speed_map(m, [1e6])

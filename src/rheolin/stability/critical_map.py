@@ -235,6 +235,13 @@ def critical_speed_map(
             raise ModelError(f"bearings: {b!r} has speed-dependent coefficients (a table)")
     if not names:
         raise ModelError("bearings: the model has no bearing to ground to vary")
+    tables = [b for b, j in model.joints.items() if j["table"] is not None]
+    if tables:
+        raise ModelError(
+            f"bearings: {tables} have speed-dependent coefficients, so the synchronous "
+            "problem is not an eigenproblem in W^2; use the Campbell diagram's 1x crossings "
+            "(rheolin campbell) for this model"
+        )
     actual = {}
     for b in names:
         j = model.joints[b]
