@@ -41,12 +41,17 @@ def main() -> None:
     ap.add_argument("--asymmetries", default=",".join(map(str, ASYMMETRIES)))
     ap.add_argument("--fractions", default=",".join(map(str, FRACTIONS)))
     ap.add_argument("--out", default=None)
+    ap.add_argument(
+        "--no-planes",
+        action="store_true",
+        help="leave out the nodes' (x, y) planes (no whirl-pair preconditioner): the A0 strategies",
+    )
     args = ap.parse_args()
     asyms = [float(x) for x in args.asymmetries.split(",")]
     fracs = [float(x) for x in args.fractions.split(",")]
     rows, t_all = [], time.perf_counter()
     for a, frac, zeta, W in itertools.product(asyms, fracs, DAMPINGS, SPEEDS):
-        s, H = shaft(args.nodes, a, frac, zeta, W)
+        s, H = shaft(args.nodes, a, frac, zeta, W, planes=not args.no_planes)
         rl.solve(floor(s), H, method="lti", stability=False)  # warm: imports, analysis cache
         t0 = time.perf_counter()
         rl.solve(floor(s), H, method="lti", stability=False)
@@ -73,7 +78,8 @@ def main() -> None:
     head = (
         f"# Non-axisymmetric catalogue at {2 * args.nodes} DOF\n\n"
         f"`OPENBLAS_NUM_THREADS=1 python bench/asymmetric.py --nodes {args.nodes} "
-        f"--asymmetries {args.asymmetries} --fractions {args.fractions}`; "
+        f"--asymmetries {args.asymmetries} --fractions {args.fractions}"
+        f"{' --no-planes' if args.no_planes else ''}`; "
         f"{len(rows)} cases, {time.perf_counter() - t_all:.0f} s in all.\n\n"
         f"| | value |\n|---|---|\n"
         f"| cases not converged | {failed} |\n"

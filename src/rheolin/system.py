@@ -125,6 +125,10 @@ class PeriodicSystem:
         #: exact constraints between DOFs (rigid links; :class:`~rheolin.constraints.
         #: LinearConstraint`): every analysis eliminates them and answers on all DOFs
         self.constraint = constraint
+        #: ``(ix, iy)``: DOF indices of the transverse planes ``(x, y)`` of every node (the
+        #: spin about ``x cross y``), when known: gmres's whirl-pair preconditioner holds a
+        #: rotating asymmetry exactly with them (:mod:`rheolin.solvers.krylov`)
+        self.whirl_pairs: tuple[np.ndarray, np.ndarray] | None = None
 
     # ------------------------------------------------------------------ validation
     @staticmethod

@@ -21,7 +21,9 @@ SPEEDS = (500.0, 1500.0, 4000.0)
 BAND_TOP = 3500.0
 
 
-def shaft(nodes: int, asymmetry: float, fraction: float, zeta: float, speed: float):
+def shaft(
+    nodes: int, asymmetry: float, fraction: float, zeta: float, speed: float, planes: bool = False
+):
     """``(system, harmonics)``: 2 DOF (x, y) per node, nearest and next-nearest springs, an
     elastic foundation, unit masses; the rotating asymmetry in the inertial frame is
     ``k_d [[cos 2Wt, sin 2Wt], [sin 2Wt, -cos 2Wt]]`` on each turning node (the asymmetric
@@ -58,4 +60,6 @@ def shaft(nodes: int, asymmetry: float, fraction: float, zeta: float, speed: flo
     at = turning[len(turning) // 2]  # the middle of the asymmetric part
     f1[2 * at : 2 * at + 2] = [1.0, -1j]
     system = rl.PeriodicSystem(speed, M={0: M}, D={0: D}, K={0: K, 2: sp.csr_array(K2)}, f={1: f1})
+    if planes:  # the (x, y) plane of every node: the whirl-pair preconditioner may use them
+        system.whirl_pairs = (2 * np.arange(nodes), 2 * np.arange(nodes) + 1)
     return system, rl.HarmonicSet.full(int(np.ceil(BAND_TOP / speed)) + 4)

@@ -144,6 +144,7 @@ class SpeedTemplate:
                 self.n_dof += modes
         dof = {key: 6 * v + np.arange(6) for key, v in self.node_index.items()}
         self.constraint = _links(model, dof, self.n_dof)
+        self.whirl_pairs = _planes(model, dof)
         terms = self._body_terms(model)
         self.joints: dict[str, SpeedTerm] = {}
         #: speed-dependent joints: name -> (table, |speed ratio| of its body, DOFs)
@@ -291,7 +292,7 @@ class SpeedTemplate:
             ):
                 for key, X in (("K", K), ("D", D), ("M", M)):
                     extra[key].append((slot[key], X.ravel()))
-        return PeriodicSystem(
+        system = PeriodicSystem(
             omega=w1,
             M=self._M.at(w1, extra["M"]),
             D=self._D.at(w1, extra["D"]),
@@ -299,6 +300,8 @@ class SpeedTemplate:
             f=f,
             constraint=self.constraint,
         )
+        system.whirl_pairs = self.whirl_pairs
+        return system
 
     def assemble(self, speed: float) -> Assembled:
         """The model at input speed ``speed`` [rad/s] (> 0), as ``Model.assemble`` gives it."""
@@ -337,6 +340,25 @@ def model_speed_plan(model: Model) -> SpeedPlan:
     ratios = propagate_speeds(inp, pairs, model.bodies, fixed)
     loads = [f["order"] * abs(ratios[f["reference"]]) for f in model.forces.values()]
     return speed_plan(inp, pairs, model.bodies, loads, fixed)
+
+
+def _planes(
+    model: Model, dof: dict[tuple[str, int], np.ndarray]
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(ix, iy)``: the (ux, uy) and (phix, phiy) DOFs of every node of the bodies along the
+    global z axis (either sense), for gmres's whirl-pair preconditioner; None without any."""
+    ix: list[int] = []
+    iy: list[int] = []
+    for b in model.bodies.values():
+        if not np.allclose(np.abs(np.asarray(b.axis, float)), (0.0, 0.0, 1.0)):
+            continue
+        for i in range(len(b.positions)):
+            d = dof[(b.name, i)]
+            ix += [int(d[0]), int(d[3])]
+            iy += [int(d[1]), int(d[4])]
+    if not ix:
+        return None
+    return np.array(ix, dtype=np.int64), np.array(iy, dtype=np.int64)
 
 
 def _links(model: Model, dof: dict[tuple[str, int], np.ndarray], n: int) -> LinearConstraint | None:

@@ -6,8 +6,8 @@ is then the true residual ``f - A q``. Unknowns are the half ``n >= 0`` as a rea
 conjugate symmetry halves the solves without changing the iterates (the minimal-residual
 coefficients of a conjugate-symmetric Krylov basis are real).
 
-Two strategies, chosen by the size of the support of ``dA`` (the DOFs the time-varying
-part touches):
+Strategies, chosen by the size of the support of ``dA`` (the DOFs the time-varying part
+touches) and by what the system knows of its rotors:
 
 * ``support`` (local time variation: gear meshes, an asymmetric disk). With ``R``, ``C`` the
   rows and columns of ``dA``, ``y - f`` lies in rows ``R``: ``y = f + P_R z`` and
@@ -25,14 +25,25 @@ part touches):
   left out (gear meshes). ``full`` runs first; after :data:`PROBE_ITERATIONS` iterations
   without converging, ``gmres`` switches to ``band`` when its factor fits the memory budget,
   and says so in the message.
+* ``pairs`` (a wide rotating asymmetry, ``+-2``, when the system knows the transverse planes
+  of its nodes, ``system.whirl_pairs``; a ``Model`` gives them for bodies along z): in whirl
+  coordinates ``f = (x - i y)/sqrt 2``, ``b = (x + i y)/sqrt 2`` the asymmetry couples ``f_m``
+  with ``b_{m+2}`` only and an isotropic ``A0`` keeps ``f`` and ``b`` apart, so the coupled
+  operator falls into independent chains the size of one harmonic block (the rotating frame
+  of the paper's eq. (5), without changing frames). It is tried first: exact on isotropic
+  supports (one iteration, about the cost of ``lti``), a preconditioner otherwise (GMRES
+  corrects anisotropy and local couplings); when it does not converge the strategies above
+  take over.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
+import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..operator import HarmonicBalance
@@ -202,6 +213,146 @@ def _band_step(op: HarmonicBalance, opts: Options) -> tuple[Step | None, str]:
     return step, what
 
 
+def _pairs_step(op: HarmonicBalance, opts: Options) -> tuple[Step | None, str]:
+    """GMRES right-preconditioned by the whirl-pair operator (see the module); ``None`` and
+    the reason when the system has no whirl pairs or other wide couplings than ``+-2``.
+
+    In the coordinates ``f = (x - i y) / sqrt 2``, ``b = (x + i y) / sqrt 2`` of every plane
+    (``system.whirl_pairs``), a rotating asymmetry couples ``f`` at harmonic ``m`` only with
+    ``b`` at ``m + 2``, and an isotropic ``A0`` keeps ``f`` and ``b`` apart: the coupled
+    operator falls into independent chains ``(f_m, b_{m+2})`` (and every other DOF at its own
+    harmonic), each the size of one harmonic block. The preconditioner keeps exactly the
+    blocks inside the chains (for an asymmetric rotor on isotropic supports: the inverse
+    itself), assembles and factorizes a chain when a residual first reaches it (an unloaded
+    chain, e.g. of the even harmonics under unbalance, never), and GMRES corrects what it
+    leaves out (anisotropic bearings, gear meshes, axial-torsional couplings).
+    """
+    from ..linalg.direct import analyze
+
+    pairs = getattr(op.system, "whirl_pairs", None)
+    if pairs is None:
+        return None, "no whirl planes known"
+    ks = op.wide_harmonics(MAX_SUPPORT)
+    if not ks or set(ks) - {-2, 2}:
+        return None, "the wide coupling is not a rotating asymmetry (harmonics +-2)"
+    system = op.system
+    nd, H, w1 = op.n_dof, op.full, op.w1
+    at = {int(h): i for i, h in enumerate(H)}
+    ix, iy = (np.asarray(p, dtype=np.int64) for p in pairs)
+    other = np.setdiff1d(np.arange(nd), np.concatenate([ix, iy]))
+    r2 = 1.0 / np.sqrt(2.0)
+    # U: columns f_j = (e_x + i e_y) / sqrt 2 and b_j = (e_x - i e_y) / sqrt 2 (q = U z)
+    TF = sp.csc_array(
+        (np.concatenate([np.full(ix.size, r2), np.full(ix.size, 1j * r2)]),
+         (np.concatenate([ix, iy]), np.tile(np.arange(ix.size), 2))),
+        shape=(nd, ix.size),
+    )  # fmt: skip
+    TB = TF.conj()
+    TO = sp.csc_array((np.ones(other.size), (other, np.arange(other.size))), shape=(nd, other.size))
+    # the sense the asymmetry turns: forward maps f -> b across +2, backward b -> f (then the
+    # chains are (b_m, f_m+2): the roles swap); the share of its coupling the chains hold
+    X2 = sp.csr_array(system.K[2]) if 2 in system.K else None
+    held = 1.0
+    if X2 is not None:
+        parts = {
+            (a, b): float(spla.norm(Ta.conj().T @ X2 @ Tb))
+            for a, Ta in (("f", TF), ("b", TB))
+            for b, Tb in (("f", TF), ("b", TB))
+        }
+        total = sum(v * v for v in parts.values()) or 1.0
+        if parts[("f", "b")] > parts[("b", "f")]:
+            TF, TB = TB, TF
+        held = max(parts[("b", "f")], parts[("f", "b")]) ** 2 / total
+
+    def X(k: int, h: int) -> Any:
+        """``K_k + s D_k + s^2 M_k`` at the column harmonic ``h``."""
+        sv = 1j * w1 * h
+        out = sp.csr_array((nd, nd), dtype=complex)
+        for table, power in ((system.K, 0), (system.D, 1), (system.M, 2)):
+            if k in table:
+                out = out + sv**power * sp.csr_array(table[k])
+        return out
+
+    def chain_matrix(kind: str, m: int) -> Any:
+        if kind == "o":
+            return sp.csc_array(TO.T @ X(0, m) @ TO)
+        has_f, has_b = m in at, m + 2 in at
+        blocks: list[list[Any]] = [[None, None], [None, None]]
+        if has_f:
+            blocks[0][0] = TF.conj().T @ X(0, m) @ TF
+        if has_b:
+            blocks[1][1] = TB.conj().T @ X(0, m + 2) @ TB
+        if has_f and has_b:
+            if -2 in ks:
+                blocks[0][1] = TF.conj().T @ X(-2, m + 2) @ TB
+            if 2 in ks:
+                blocks[1][0] = TB.conj().T @ X(2, m) @ TF
+        keep = [i for i, ok in enumerate((has_f, has_b)) if ok]
+        return sp.csc_array(sp.block_array([[blocks[i][j] for j in keep] for i in keep]))
+
+    chains = [("p", m) for m in sorted({int(h) for h in H} | {int(h) - 2 for h in H})]
+    if other.size:
+        chains += [("o", int(h)) for h in H]
+    factors: dict[tuple[str, int], Any] = {}
+
+    def chain_solve(c: tuple[str, int], r: np.ndarray) -> np.ndarray:
+        if c not in factors:
+            A = chain_matrix(*c)
+            A.sort_indices()
+            try:
+                factors[c] = analyze("superlu", A.indptr, A.indices, True).factor(A.data)
+            except (RuntimeError, ValueError) as exc:
+                raise RuntimeError(f"a whirl-pair chain is singular ({exc})") from None
+        return np.asarray(factors[c].solve(r))
+
+    weights = np.where(op.pos == 0, 1.0, 2.0)
+    nf = ix.size
+
+    def inverse(Y: np.ndarray) -> np.ndarray:
+        R = op.expand(Y)  # (|H|, n)
+        RF, RB, RO = R @ TF.conj(), R @ TB.conj(), R[:, other]  # z = U^H r per harmonic
+        XF, XB = np.zeros_like(RF), np.zeros_like(RB)
+        XO = np.zeros_like(RO)
+        for kind, m in chains:
+            if kind == "o":
+                r = RO[at[m]]
+                if np.any(r):
+                    XO[at[m]] = chain_solve((kind, m), r)
+                continue
+            parts = []
+            if m in at:
+                parts.append(RF[at[m]])
+            if m + 2 in at:
+                parts.append(RB[at[m + 2]])
+            r = np.concatenate(parts)
+            if not np.any(r):  # an unloaded chain stays zero
+                continue
+            x = chain_solve((kind, m), r)
+            if m in at:
+                XF[at[m]], x = x[:nf], x[nf:]
+            if m + 2 in at:
+                XB[at[m + 2]] = x
+        Xq = XF @ TF.T + XB @ TB.T  # q = U z per harmonic
+        if other.size:
+            Xq[:, other] += XO
+        return op.half(Xq)
+
+    def preconditioned(Y: np.ndarray) -> np.ndarray:
+        return op.apply(inverse(Y))
+
+    def step(F: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, list[float]]:
+        Y0 = None if x0 is None else op.apply(x0)
+        Y0 = _better_than_zero(preconditioned, F, Y0, op.norm)
+        Y, info, history = _real_gmres(preconditioned, F, weights, opts, op.rhs_norm, 60, Y0)
+        return inverse(Y), info, history
+
+    what = (
+        f"whirl-pair preconditioner: {held:.0%} of the rotating asymmetry held exactly in "
+        "independent (f_m, b_m+2) chains, each factorized when first reached"
+    )
+    return step, what
+
+
 def _full_on(
     op: HarmonicBalance, opts: Options, maxiter: int, Q: np.ndarray, history: list[float]
 ) -> tuple[np.ndarray, int, list[float]]:
@@ -225,7 +376,18 @@ def solve_gmres(op: HarmonicBalance, opts: Options) -> SolverOutcome:
     step = _support_step(op, opts) if strategy == "support" else _full_step(op, opts)
     note = ""
     maxiter = 500 if opts.maxiter is None else int(opts.maxiter)
-    if strategy == "full" and op.wide_harmonics(MAX_SUPPORT) and maxiter > PROBE_ITERATIONS:
+    solved, tried = False, ""
+    if strategy == "full" and op.wide_harmonics(MAX_SUPPORT):
+        pairs, pairs_what = _pairs_step(op, opts)
+        if pairs is not None:
+            Q, info, history = pairs(op.rhs, opts.x0)
+            if info == 0:
+                strategy, step, note, solved = "pairs", pairs, pairs_what, True
+            else:  # what the chains leave out is too strong: the A0 strategies from scratch
+                tried = f"the whirl-pair preconditioner did not converge ({len(history)} its); "
+    if solved:
+        pass
+    elif strategy == "full" and op.wide_harmonics(MAX_SUPPORT) and maxiter > PROBE_ITERATIONS:
         probe = dataclasses.replace(opts, maxiter=PROBE_ITERATIONS)
         Q, info, history = _full_step(op, probe)(op.rhs, opts.x0)
         if info != 0 and len(history) >= 2 and 0 < history[-1] < history[0]:
@@ -252,7 +414,10 @@ def solve_gmres(op: HarmonicBalance, opts: Options) -> SolverOutcome:
     else:
         Q, info, history = step(op.rhs, opts.x0)
     refinements = 0
-    while info == 0 and not op.inverse.exact and refinements < MAX_REFINEMENTS:
+    # the pairs preconditioner is a direct factor of its own: A0's (possibly modal,
+    # approximate) inverse is not built, and needs no refinement against
+    uses_a0 = strategy != "pairs"
+    while info == 0 and uses_a0 and not op.inverse.exact and refinements < MAX_REFINEMENTS:
         R = op.residual(Q)
         if op.norm(R) <= opts.rtol * op.rhs_norm:
             break
@@ -263,10 +428,11 @@ def solve_gmres(op: HarmonicBalance, opts: Options) -> SolverOutcome:
     extra = {
         "strategy": strategy,
         "support": support,
-        "backend": op.inverse.name,
+        "backend": op.inverse.name if uses_a0 else "lu (whirl-pair chains)",
         "refinements": refinements,
         "warm_start": opts.x0 is not None,
     }
+    note = tried + note
     tail = f"; {note}" if note else ""
     if info == 0:
         msg = f"converged in {its} iterations ({strategy} strategy){tail}"
