@@ -295,6 +295,44 @@ def test_hill_pencil_is_linear_in_the_harmonic_count() -> None:
     assert peak < 500e6
 
 
+@pytest.mark.parametrize(("k_scale", "w"), [(1e4, 3.0), (1e-3, 30.0)])
+def test_error_bound_norms_equal_those_of_the_assembled_pencil(k_scale: float, w: float) -> None:
+    """The 1-norms of the balanced Hill pencil used in the error bounds are taken from the
+    lattice couplings (column sums) without assembling the pencil: they must equal
+    ``scipy.sparse.linalg.norm`` of :func:`hill_pencil` on a two-mesh chain with a
+    time-varying mass, damping and stiffness (every coupling present), stiffness-dominated
+    and mass-dominated."""
+    import importlib
+
+    import scipy.sparse.linalg as spla
+
+    from rheolin.hill import state_scaling
+    from rheolin.hill_lattice import LatticeHill
+
+    search = importlib.import_module("rheolin.floquet.search")
+    rng = np.random.default_rng(3)
+    n = 4
+
+    def sym(scale: float) -> np.ndarray:
+        a = rng.standard_normal((n, n))
+        return scale * (a @ a.T + n * np.eye(n))
+
+    M0, K0, D0 = sym(1.0), sym(k_scale), sym(0.5)
+    s = rl.PeriodicSystem(
+        w,
+        M={0: M0, 2: 0.4 * M0, -2: 0.4 * M0},
+        D={0: D0, 3: 0.1j * D0, -3: -0.1j * D0},
+        K={0: K0, 3: 0.2 * K0, -3: 0.2 * K0, 5: 0.1 * K0, -5: 0.1 * K0},
+    )
+    sq, sv = state_scaling(s)
+    for order in (1, 2):
+        H = system_lattice(s, order).indices
+        A, B = hill_pencil(s, H)
+        normA, normB = search._pencil_norms(LatticeHill(s, H), sq, sv)
+        assert normA == pytest.approx(spla.norm(A, 1), rel=1e-13)
+        assert normB == pytest.approx(spla.norm(B, 1), rel=1e-13)
+
+
 # --------------------------------------------------------------------------- the gearbox
 def test_gearbox_gets_a_decided_verdict_checked_on_a_refined_lattice() -> None:
     from rheolin.data import example_path

@@ -27,8 +27,13 @@ class _Outer:
         self.avg = avg
         self.O, self.oi, self.io = hill.outer()
         n = hill.n
-        self.Xq = avg.X[:n] / avg.sq[:, None]  # Tq X_top
-        self.Wv = avg.W[n:].conj() / avg.sv[:, None]  # Tv-weighted conj(W_bot)
+        # the DOFs the time variation touches: rows of the couplings to the outside (where
+        # Q_OI q is nonzero) and their columns (where Q_IO^H u is); often a few (the gear
+        # mesh DOFs), which makes the modal sums that much cheaper
+        self.rows = np.unique(self.oi.rows % n) if self.oi.nnz else np.zeros(0, int)
+        self.cols = np.unique(self.io.cols % n) if self.io.nnz else np.zeros(0, int)
+        self.Xq = (avg.X[:n] / avg.sq[:, None])[self.cols]  # Tq X_top
+        self.Wv = (avg.W[n:].conj() / avg.sv[:, None])[self.rows]  # Tv-weighted conj(W_bot)
 
     def estimate(self, lam: complex, q: np.ndarray, u: np.ndarray) -> float:
         hill, n, w = self.hill, self.hill.n, self.hill.w
@@ -41,8 +46,8 @@ class _Outer:
             return float("inf")
         s_o = lam + 1j * w * self.O.astype(float)
         if self.avg.modal:
-            Ga = a @ self.Xq
-            Gr = r @ self.Wv
+            Ga = a[:, self.cols] @ self.Xq
+            Gr = r[:, self.rows] @ self.Wv
             with np.errstate(divide="ignore", invalid="ignore"):
                 term = -np.sum(Ga * Gr / (self.avg.lam[None, :] - s_o[:, None]))
         else:

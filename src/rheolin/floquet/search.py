@@ -11,7 +11,6 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..hill import hill_pencil
 from ..hill_lattice import LatticeHill
 from ..lattice import Lattice
 from ..system import PeriodicSystem
@@ -29,10 +28,19 @@ __all__ = ["ARNOLDI_STEPS", "ARNOLDI_TOL", "SPLU", "UNRESOLVED_EDGE", "lattice_e
 UNRESOLVED_EDGE = 0.1
 
 
-#: SuperLU options for the lattice operator: column AMD with threshold pivoting that prefers
-#: the diagonal (half the fill of partial pivoting on the gearbox; the Newton step on each
-#: representative uses Q itself, so the factor's accuracy does not limit the exponents).
-SPLU: dict[str, Any] = {"permc_spec": "COLAMD", "diag_pivot_thresh": 0.1}
+#: SuperLU options for the lattice operator. ``Q(sigma)`` is structurally symmetric (harmonic
+#: ``m`` couples to ``n`` exactly where ``n`` couples to ``m``), so SuperLU's symmetric mode:
+#: minimum degree on ``A + A^T`` and diagonal pivots unless one is below 1 % of its column
+#: (threshold partial pivoting). On the gearbox (one thread) this factorizes order 2 (4,410
+#: unknowns) in 6.5 ms instead of 8 ms and order 3 (14,994) in 25 ms instead of 80-170 ms,
+#: with 2-3x less fill and 2x faster solves than column AMD with a 0.1 threshold; residuals
+#: 1e-12 either way. The Newton step on each representative uses Q itself, so the factor's
+#: accuracy does not limit the exponents.
+SPLU: dict[str, Any] = {
+    "permc_spec": "MMD_AT_PLUS_A",
+    "diag_pivot_thresh": 0.01,
+    "options": {"SymmetricMode": True},
+}
 
 
 #: Arnoldi: checkpoints (basis sizes) and the relative residual of an accepted Ritz pair.
@@ -165,7 +173,7 @@ def lattice_exponents(
             sigma = at  # where the coarse exponents are: their continuations converge first
             warm_starts.append(cid)
         t1 = time.perf_counter()
-        lu = _factor(hill, sigma, w, many=True)
+        lu = _factor(hill, sigma, w, many=warm is None)
         sigma = lu.sigma
         lu_seconds += time.perf_counter() - t1
         P = hill.inner.P(sigma, w)
@@ -273,9 +281,12 @@ def lattice_exponents(
     expected = int(sum(quotas.values()))
     reps = _select(pool, quotas, w, nh, share=share)
     # left eigenvectors, error bounds and truncation estimates of the representatives
-    A_b, B_b = hill_pencil(system, H)
-    normA, normB = spla.norm(A_b, 1), spla.norm(B_b, 1)
-    del A_b
+    normA, normB = _pencil_norms(hill, avg.sq, avg.sv)
+    Mb = sp.diags_array(1.0 / sv_rep) @ Mconv @ sp.diags_array(1.0 / sv_rep)
+
+    def B_b(xb: np.ndarray) -> np.ndarray:  # the balanced first-order B times xb
+        return np.concatenate([xb[: n * nh], Mb @ xb[n * nh :]])
+
     lams, bounds, trunc, edges, cents, doms, partners = [], [], [], [], [], [], []
     vectors: list[np.ndarray | None] = []
     certified: list[bool] = []
@@ -304,7 +315,7 @@ def lattice_exponents(
         # first-order vectors: right (q, s q), left (P^H u, u); balanced: R^-1 x, L^-1 y
         xb = np.concatenate([xq * sq_rep, hill.s(lam_c) * xq * sv_rep])
         yb = np.concatenate([yq / sq_rep, u * sv_rep])
-        denom = abs(np.vdot(yb, B_b @ xb))
+        denom = abs(np.vdot(yb, B_b(xb)))
         nx, ny = np.linalg.norm(xb), np.linalg.norm(yb)
         bound = _EPS * (normA + abs(lam_c) * normB) * nx * ny / max(denom, np.finfo(float).tiny)
         tau = outer.estimate(lam_c, xq, u) if outer is not None else 0.0
@@ -368,12 +379,42 @@ def lattice_exponents(
             [c.forced or c.edge > UNRESOLVED_EDGE for c, cj in reps for _ in range(2 if cj else 1)],
             dtype=bool,
         ),
-        liouville=liouville_sum(system),
+        liouville=start.liouville if start is not None else liouville_sum(system),
         info=info,
         vectors=vectors,
         indices=H,
         modes=avg,
     )
+
+
+def _pencil_norms(hill: LatticeHill, sq: np.ndarray, sv: np.ndarray) -> tuple[float, float]:
+    """1-norms of the balanced first-order Hill pencil ``(A, B)`` of
+    :func:`rheolin.hill.hill_pencil` on the lattice, from the couplings of ``hill`` (column
+    sums; without building the pencil, which cost 0.15 s at order 3 on the gearbox).
+
+    Columns of harmonic ``h``: ``q`` columns ``|w h| + sum |K| / (s_v,row s_q,col)``, ``v``
+    columns ``s_q / s_v + sum |D + i h w M| / (s_v,row s_v,col)``; ``B``: 1 on ``q``
+    columns and ``sum |M| / (s_v,row s_v,col)`` on ``v`` columns.
+    """
+    inner, n, w = hill.inner, hill.n, hill.w
+    size = hill.size
+    dof_r, dof_c = inner.rows % n, inner.cols % n
+    col_q = np.abs(w * np.repeat(hill.H.astype(float), n))
+    col_v = np.tile(sq / sv, hill.H.size)
+    b_v: np.ndarray = np.zeros(size)
+    if inner.nnz:
+        col_q = col_q + np.bincount(
+            inner.cols, np.abs(inner.K) / (sv[dof_r] * sq[dof_c]), minlength=size
+        )
+        col_v = col_v + np.bincount(
+            inner.cols,
+            np.abs(inner.D + 1j * w * inner.col_h * inner.M) / (sv[dof_r] * sv[dof_c]),
+            minlength=size,
+        )
+        b_v = np.bincount(inner.cols, np.abs(inner.M) / (sv[dof_r] * sv[dof_c]), minlength=size)
+    normA = float(max(col_q.max(initial=0.0), col_v.max(initial=0.0)))
+    normB = float(max(1.0, b_v.max(initial=0.0)))
+    return normA, normB
 
 
 def _warm_start(
@@ -467,13 +508,14 @@ class _Shifted:
 
 
 #: Above these many unknowns the lattice operator is factorized by MKL PARDISO (where
-#: installed; analysis reused for every shift and speed with the same pattern), for a factor
-#: used a few times (the polish) and one used for a whole Arnoldi run. On the gearbox
-#: (one thread), SuperLU factorizes faster at lattice order 2 (4,410 unknowns: 8 ms against
-#: 46 ms) and 5x slower at order 3 (14,994: 0.14 s against 0.03 s; 28x at order 4), but its
-#: solves are 3x faster at order 3 (2.5 ms against 8 ms, less fill than METIS here), which
-#: decides a 54-step Arnoldi run.
-PARDISO_ABOVE = 8000
+#: installed; the analysis is made once per lattice and serves every shift), for a factor
+#: used a few times (the polish, a warm-started Arnoldi run) and one used for a whole cold
+#: Arnoldi run. On the gearbox (one thread; PARDISO refining only after perturbed pivots,
+#: SuperLU in symmetric mode), factor / solve: order 2 (4,410 unknowns) 2.7 / 0.5 ms against
+#: 5-7 / 0.25 ms; order 3 (14,994) 11.5 / 2.1 ms against 25-40 / 1.2 ms; order 4 (41,454)
+#: 74 / 5.5 ms against 550 / 11 ms. A cold Arnoldi run (up to 54 steps) favours SuperLU's
+#: solves up to order 3.
+PARDISO_ABOVE = 10000
 PARDISO_ABOVE_ARNOLDI = 30000
 
 
@@ -496,7 +538,7 @@ def _pardiso_factor(hill: LatticeHill, Q: Any) -> Any | None:
     cached = getattr(hill, "_pardiso", None)
     if cached is None or cached[0] != key:
         backend = PardisoBackend(
-            Q.indptr.astype(np.int64), Q.indices.astype(np.int64), True, slots=4
+            Q.indptr.astype(np.int64), Q.indices.astype(np.int64), True, slots=16, refinement=0
         )
         hill._pardiso = cached = (key, backend)  # type: ignore[attr-defined]
     try:
@@ -531,6 +573,10 @@ def _polish(
 ) -> tuple[complex, np.ndarray, np.ndarray, np.ndarray]:
     """One LU at the exponent: inverse iteration for the right and left null vectors of
     ``Q(lam)`` and a two-sided Newton (Rayleigh functional) step on ``lam``.
+
+    (Reusing the search's factor at ``sigma`` instead, with shift-invert steps of the
+    first-order pencil, gave the same vectors to 1e-15 but was slower on the gearbox: 5-13
+    steps where one LU and three solves do, and the kept factors cost memory.)
 
     Returns ``(lam, q, u, P(lam)^H u)``.
     """

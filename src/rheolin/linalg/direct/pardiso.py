@@ -106,6 +106,7 @@ class PardisoAnalysis:
         complex_values: bool,
         slots: int = 1,
         matching: bool = False,
+        refinement: int = 2,
     ) -> None:
         lib = load_mkl()
         if lib is None:
@@ -130,7 +131,9 @@ class PardisoAnalysis:
         self.iparm = np.zeros(64, dtype=np.int32)
         self.iparm[0] = 1  # user-supplied parameters
         self.iparm[1] = 2  # METIS nested dissection
-        self.iparm[7] = 2  # iterative refinement steps on perturbed pivots
+        # iterative refinement: at most this many steps on every solve; 0: two steps only
+        # after perturbed pivots (each step is a product and a solve: 3x the plain solve)
+        self.iparm[7] = refinement
         self.iparm[9] = 13  # pivot perturbation 1e-13
         # scaling and weighted matching are computed from the values in the analysis, which
         # serves every harmonic: off by default (pivot perturbation + refinement instead)
@@ -278,9 +281,16 @@ class PardisoBackend:
     releases_gil = True
 
     def __init__(
-        self, indptr: np.ndarray, indices: np.ndarray, complex_values: bool, slots: int = 1
+        self,
+        indptr: np.ndarray,
+        indices: np.ndarray,
+        complex_values: bool,
+        slots: int = 1,
+        refinement: int = 2,
     ) -> None:
-        self.analysis = PardisoAnalysis(indptr, indices, complex_values, slots)
+        self.analysis = PardisoAnalysis(
+            indptr, indices, complex_values, slots, refinement=refinement
+        )
         self.factor_bytes = self.analysis.factor_bytes
         self._free = list(range(self.analysis.slots))[::-1]
         self._lock = threading.Lock()
