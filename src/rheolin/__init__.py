@@ -14,6 +14,7 @@ from .errors import ModelError
 from .floquet import FloquetResult, floquet
 from .harmonics import HarmonicSet, TruncationWarning
 from .mechanics import Assembled, Model
+from .preload import OperatingPoint, operating_point
 from .solution import STATUS, Solution
 from .solvers import METHODS, solve
 from .system import PeriodicSystem
@@ -26,10 +27,12 @@ __all__ = [
     "HarmonicSet",
     "Model",
     "ModelError",
+    "OperatingPoint",
     "PeriodicSystem",
     "Solution",
     "TruncationWarning",
     "floquet",
+    "operating_point",
     "solve",
 ]
 

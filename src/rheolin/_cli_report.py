@@ -135,6 +135,8 @@ def print_summary(console: Console, s: dict[str, Any], seconds: float) -> None:
     colour = {"stable": "green", "unstable": "red"}.get(stab, "yellow")
     console.print(f"stability: [{colour}]{escape(str(stab))}[/{colour}]{_stability_detail(s)}")
     console.print(f"[dim]{escape(str(s['message']))}[/dim]")
+    if s.get("operating_point"):
+        print_operating_point(console, s["operating_point"])
     t = Table(title="Largest responses per body (radial, single-sided amplitude)")
     for col in ("body", "node", "static", "dynamic (sum)", "largest harmonics"):
         t.add_column(col)
@@ -174,3 +176,62 @@ def print_summary(console: Console, s: dict[str, Any], seconds: float) -> None:
             )
             t.add_row(escape(name), _um(m["mean_m"]), tops)
         console.print(t)
+
+
+def print_operating_point(console: Console, op: dict[str, Any]) -> None:
+    """The preloaded operating point (``OperatingPoint.to_dict``): static deflection, bearing
+    loads, operating stiffness of every load-dependent joint, torques."""
+    where = op["max_displacement_at"]
+    console.print(
+        f"[bold]Static equilibrium[/bold] (preloaded operating point): largest deflection "
+        f"{_um(op['max_displacement_m'])} at {escape(str(where['body']))} node {where['node']}; "
+        f"{op['iterations']} Newton iterations, {op['load_steps']} load step(s), relative "
+        f"residual {op['residual']:.1e}"
+    )
+    if op["torques_N_m"]:
+        console.print(
+            "torques: "
+            + ", ".join(f"{escape(k)} {v:.6g} N·m" for k, v in op["torques_N_m"].items())
+        )
+    rows = []
+    for name, b in op["bearings"].items():
+        K = [[float(x) for x in row] for row in b["stiffness_N_per_m"]]
+        eig = sorted(abs(float(x)) for x in _eig2(K))
+        contact = f"{b['in_contact']} of {b['elements']}" if b["elements"] else (
+            "yes" if b["in_contact"] else "no")  # fmt: skip
+        rows.append((escape(name), f"{b['load_N']:.4g}", _um(_norm(b["deflection_m"])),
+                     f"{eig[-1]:.3g} / {eig[-2]:.3g}", contact))  # fmt: skip
+    if rows:
+        t = Table(title="Load-dependent bearings at the operating point")
+        for col in ("bearing", "load (N)", "deflection", "stiffness (N/m, principal)", "contact"):
+            t.add_column(col)
+        for r in rows:
+            t.add_row(*r)
+        console.print(t)
+    if op["meshes"]:
+        t = Table(title="Load-dependent meshes at the operating point")
+        for col in ("mesh", "force (N)", "deflection", "stiffness (N/m)", "x nominal"):
+            t.add_column(col)
+        for name, m in op["meshes"].items():
+            t.add_row(escape(name), f"{m['force_N']:.4g}", _um(m["deflection_m"]),
+                      f"{m['stiffness_N_per_m']:.4g}",
+                      f"{m['stiffness_N_per_m'] / m['nominal_N_per_m']:.3g}")  # fmt: skip
+        console.print(t)
+    if any(abs(x) > 0 for x in op.get("rigid_load", [])):
+        console.print(
+            "[yellow]unbalanced torques[/yellow]: the constant-speed constraint holds "
+            + ", ".join(f"{x:.3g}" for x in op["rigid_load"])
+            + " (R^T f); declare the output torque as 'reaction' to balance them"
+        )
+
+
+def _norm(v: Any) -> float:
+    return math.sqrt(sum(float(x) ** 2 for x in v))
+
+
+def _eig2(K: list[list[float]]) -> list[float]:
+    """Eigenvalues of the symmetric part of a 3x3 stiffness (bearing plane and axis)."""
+    import numpy as np
+
+    A = np.asarray(K, dtype=float)
+    return [float(x) for x in np.linalg.eigvalsh(0.5 * (A + A.T))]

@@ -305,6 +305,8 @@ def run(
     summary = summarize(ds)
     summary["model_file"] = str(model)
     summary["warnings"] = notes.messages
+    if lm.model.preloaded:  # solved about it: the static equilibrium (cached)
+        summary["operating_point"] = lm.model.operating_point(w).to_dict()
     verdict = point_verdict(summary)
     with sigterm_as_interrupt(), staged_output(out_dir, RUN_FILES) as stage:
         write_dataset(ds, stage / "results.nc")
@@ -383,9 +385,21 @@ def sweep(
         "max_order": max_order,
         "stability_map": stability_map,
     }
+    _show_operating_point(lm.model, float(w[0]), "the first speed, the file's parameters")
     run = dict(out=out_dir, overwrite=overwrite, workers=workers, chunk_size=chunk_size)
     code = run_sweep(console, err, model, w, vary, settings, scheduler, run, plots, quantity)
     raise typer.Exit(code)
+
+
+def _show_operating_point(model: Any, speed: float, where: str) -> None:
+    """Print the preloaded operating point (static equilibrium) a preloaded model is solved
+    about: every speed of a sweep or Campbell diagram is linearized there."""
+    if not model.preloaded:
+        return
+    from ._cli_report import print_operating_point
+
+    console.print(f"[dim]operating point at {speed * 30 / np.pi:.1f} rpm ({where}):[/dim]")
+    print_operating_point(console, model.operating_point(speed).to_dict())
 
 
 @app.command()
@@ -434,6 +448,8 @@ def campbell(
     written = [out_dir / "campbell.nc", out_dir / "campbell.png"]
     if smap is not None:
         written.append(out_dir / "stability_map.nc")
+    if spinning.size:
+        _show_operating_point(lm.model, float(spinning[0]), "the first spinning speed")
     table = Table(title=f"critical speeds of {escape(model.name)} (order-line crossings)")
     for col in ("order", "mode", "kind", "speed (rpm)", "frequency (Hz)"):
         table.add_column(col, justify="right" if "(" in col or col == "mode" else "left")

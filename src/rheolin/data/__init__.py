@@ -1,7 +1,7 @@
 """Built-in example model files (TOML), shipped as package data.
 
 >>> sorted(EXAMPLES)
-['gearbox', 'rotor']
+['gearbox', 'preloaded', 'rotor']
 >>> example_text("rotor").startswith("#")
 True
 """
@@ -17,6 +17,8 @@ __all__ = ["EXAMPLES", "example_path", "example_text"]
 EXAMPLES = {
     "gearbox": "two-stage spur gearbox, hunting-tooth ratios, unbalance, a shaft with a flat",
     "rotor": "small asymmetric Jeffcott-type rotor on anisotropic bearings (fast, Floquet-checked)",
+    "preloaded": "spur gear pair under torque: Hertzian ball/roller bearings, ISO 6336 mesh "
+    "stiffness, solved about its static equilibrium",
 }
 
 

@@ -248,6 +248,17 @@ class _Builder:
             for i, j in enumerate(b.bearings):
                 if j.journal is None:
                     self._bearing(b.name, j, f"{path}.bearings[{i}]")
+            for i, r in enumerate(b.rolling_bearings):
+                p = f"{path}.rolling_bearings[{i}]"
+                self._node(b.name, r.node, f"{p}.node")
+                if (r.other_body is None) != (r.other_node is None):
+                    raise ModelError(f"{p}.other_node: give `other_body` and `other_node` together")
+                if r.other_body is not None:
+                    assert r.other_node is not None
+                    self._node(r.other_body, r.other_node, f"{p}.other_node", f"{p}.other_body")
+                kw = r.model_dump(exclude={"name", "node", "stiffness"})
+                self._call(p, self.model.add_rolling_bearing, r.name, b.name, r.node,
+                           stiffness=r.stiffness or 0.0, **kw)  # fmt: skip
         for i, m in enumerate(spec.meshes):
             self._mesh(m, f"meshes[{i}]")
         for path, b in bodies:  # after the meshes: the sense each shaft turns is known
@@ -267,6 +278,10 @@ class _Builder:
             self._call(
                 p, self.model.add_force, f.name, f.body, f.node, order=Fraction(f.order), **kw
             )
+        for i, t in enumerate(spec.torques):
+            p = f"torques[{i}]"
+            self._node(t.body, t.node, f"{p}.node", f"{p}.body")
+            self._call(p, self.model.add_torque, t.name, t.body, t.node, t.torque)
         for i, r in enumerate(spec.rigid_links):
             p = f"rigid_links[{i}]"
             self._node(r.body, r.node, f"{p}.node", f"{p}.body")

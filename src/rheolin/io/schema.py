@@ -25,7 +25,9 @@ __all__ = [
     "Mesh",
     "ModelFile",
     "RigidBody",
+    "RollingBearing",
     "Shaft",
+    "Torque",
     "field_path",
     "table_class",
 ]
@@ -320,6 +322,86 @@ class Bearing(_Strict):
         return self
 
 
+def _hertz_stiffness(value: Any, exponent: float) -> float:
+    """``K`` of ``F = K delta^n`` [N/m^n]: a number (SI) or a quantity string."""
+    if isinstance(value, bool) or not isinstance(value, int | float | str):
+        raise ValueError(f"expected a number (SI, N/m^{exponent:g}) or a quantity, got {value!r}")
+    if isinstance(value, str):
+        from .units import _registry
+
+        try:
+            out = float(_registry()(value).to(f"N/m**{exponent!r}").magnitude)
+        except Exception as exc:
+            raise ValueError(
+                f"expected a stiffness in N/m^{exponent:.4g} (the exponent of "
+                f"{'ball' if exponent == 1.5 else 'roller'} contact), got {value!r}: {exc}"
+            ) from None
+    else:
+        out = float(value)
+    if not (np.isfinite(out) and out > 0):
+        raise ValueError(f"must be > 0, got {value!r}")
+    return out
+
+
+class RollingBearing(_Strict):
+    """``Model.add_rolling_bearing``: a load-dependent rolling-element bearing."""
+
+    name: Name
+    node: Index
+    law: Literal["elements", "radial", "table"] = "elements"
+    kind: Literal["ball", "roller"] = "ball"
+    stiffness: Raw | None = None
+    elements: int = Field(default=0, ge=0, strict=True)
+    clearance: LengthNonNeg = 0.0
+    angle: Angle = 0.0
+    deflection: VecLengthNonNeg | None = None
+    force: Annotated[list[float], BeforeValidator(_vector("force", "0+"))] | None = None
+    damping: DampingNonNeg = 0.0
+    other_body: Name | None = None
+    other_node: Index | None = None
+
+    @model_validator(mode="after")
+    def _law(self) -> RollingBearing:
+        from ..mechanics.rolling import EXPONENTS
+
+        if self.law == "table":
+            if self.deflection is None or self.force is None:
+                raise ValueError("law = 'table' needs `deflection` and `force` (equally many)")
+            if self.stiffness is not None:
+                raise ValueError("law = 'table': give `deflection` and `force`, not `stiffness`")
+            return self
+        if self.stiffness is None:
+            raise ValueError(
+                f"law = {self.law!r} needs `stiffness` (N/m^n of the Hertz law, n = 3/2 for "
+                "ball, 10/9 for roller contact)"
+            )
+        if self.law == "elements" and self.elements < 3:
+            raise ValueError(
+                "law = 'elements' needs `elements` (the number of balls/rollers, >= 3)"
+            )
+        try:
+            self.stiffness = _hertz_stiffness(self.stiffness, EXPONENTS[self.kind])
+        except ValueError as exc:
+            raise ValueError(f"`stiffness`: {exc}") from None
+        return self
+
+
+class Torque(_Strict):
+    """``Model.add_torque``: a static torque about the body's axis, or ``"reaction"``."""
+
+    name: Name
+    body: Name
+    node: Index
+    torque: Any = "reaction"
+
+    @field_validator("torque")
+    @classmethod
+    def _torque(cls, value: Any) -> Any:
+        if value == "reaction":
+            return value
+        return to_si(value, "moment")
+
+
 class ShaftLayer(_Strict):
     """``Model.add_shaft_layer``: a concentric layer (sleeve, hub) over some elements."""
 
@@ -340,6 +422,7 @@ class _Body(_Strict):
     speed_ratio: Ratio | None = None
     disks: list[Disk] = []
     bearings: list[Bearing] = []
+    rolling_bearings: list[RollingBearing] = []
 
     @field_validator("axis")
     @classmethod
@@ -424,6 +507,24 @@ class Mesh(_Strict):
     damping: DampingNonNeg = 0.0
     transmission_error: list[TransmissionError] = []
     side: Literal[1, -1] = 1
+    load_law: Literal["iso6336", "table"] | None = None
+    face_width: LengthPos | None = None
+    load_forces: Annotated[list[float], BeforeValidator(_vector("force", "0+"))] | None = None
+    load_stiffness: Annotated[list[float], BeforeValidator(_vector("stiffness", "+"))] | None = None
+
+    @model_validator(mode="after")
+    def _load_law(self) -> Mesh:
+        if self.load_law == "iso6336" and self.face_width is None:
+            raise ValueError("load_law = 'iso6336' needs `face_width`")
+        if self.load_law == "table" and (self.load_forces is None or self.load_stiffness is None):
+            raise ValueError("load_law = 'table' needs `load_forces` and `load_stiffness`")
+        if self.load_law is None and (
+            self.face_width is not None
+            or self.load_forces is not None
+            or self.load_stiffness is not None
+        ):
+            raise ValueError("`face_width`, `load_forces`, `load_stiffness` need `load_law`")
+        return self
 
 
 class Force(_Strict):
@@ -486,6 +587,7 @@ class ModelFile(_Strict):
     condensed_bodies: list[CondensedBody] = []
     meshes: list[Mesh] = []
     forces: list[Force] = []
+    torques: list[Torque] = []
     rigid_links: list[RigidLink] = []
 
 

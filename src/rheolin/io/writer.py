@@ -91,7 +91,7 @@ def model_to_toml(model: Any, path: str | Path | None = None) -> str:
     tables: dict[str, dict[str, Any]] = {}
     lists: dict[str, list[dict[str, Any]]] = {
         "shafts": [], "rigid_bodies": [], "condensed_bodies": [], "meshes": [], "forces": [],
-        "rigid_links": [],
+        "torques": [], "rigid_links": [],
     }  # fmt: skip
     for method, call in model.calls:
         if method == "add_shaft":
@@ -134,6 +134,11 @@ def model_to_toml(model: Any, path: str | Path | None = None) -> str:
             lists["meshes"].append(t)
         elif method == "add_force":
             lists["forces"].append(_args(call))
+        elif method == "add_rolling_bearing":
+            t = _args(call, ("body",))
+            tables[call["body"]].setdefault("rolling_bearings", []).append(t)
+        elif method == "add_torque":
+            lists["torques"].append(_args(call))
         elif method == "add_rigid_link":
             lists["rigid_links"].append(_args(call))
         elif method == "set_gravity":

@@ -125,7 +125,11 @@ class Model:
         self.meshes: dict[str, dict[str, Any]] = {}
         self.forces: dict[str, dict[str, Any]] = {}
         self.links: dict[str, dict[str, Any]] = {}
+        #: load-dependent joints and applied torques (the operating point, rheolin.preload)
+        self.rolling: dict[str, dict[str, Any]] = {}
+        self.torques: dict[str, dict[str, Any]] = {}
         self.gravity: np.ndarray | None = None
+        self._operating: dict[tuple[float, int], Any] = {}
         #: ``(method, arguments)`` of every ``add_*``/``set_gravity`` call, in order.
         self.calls: list[tuple[str, dict[str, Any]]] = []
 
@@ -499,6 +503,7 @@ class Model:
         extrapolate: bool = False,
         offset: Sequence[float] | None = None,
         other_offset: Sequence[float] | None = None,
+        preload: Sequence[float] | None = None,
     ) -> None:
         """A bearing, seal or coupling from a node to ground (default) or to another body's node.
 
@@ -519,6 +524,12 @@ class Model:
         translations and tilts exactly; ``other_offset`` likewise on the other body's side.
         Inertial-frame joints only (``frame=None``).
 
+        ``preload`` [N, N m] (global axes): the force (3) or force and moment (6) the joint
+        exerts on its support at zero relative displacement, a preloaded spring: it acts as
+        ``preload + K delta``; the static load ``-preload`` on the node (``+preload`` on the
+        other node) and the reported bearing force include it. A linearized load-dependent
+        joint is such a spring (:mod:`rheolin.preload`). Constant joints only.
+
         >>> m = Model()
         >>> m.add_shaft("s", [0.0, 0.5], outer_diameter=0.05, material="steel")
         >>> m.add_bearing("b", "s", 0, stiffness=[[[1e7, 2e6], [-2e6, 1e7]], [[2e7, 4e6],
@@ -527,7 +538,7 @@ class Model:
         >>> float(m.bearing_coefficients("b", 200.0)[0][0, 1])
         3000000.0
         """
-        self._new_item(name, self.joints)
+        self._new_joint(name)
         b = self._body(body, "body")
         self._node(b, node)
         if (other_body is None) != (other_node is None):
@@ -542,6 +553,17 @@ class Model:
             raise ModelError("`other_offset` needs `other_body` (a joint to ground has one side)")
         lever(offset)  # checked: a finite 3-vector
         lever(other_offset)
+        pre = None
+        if preload is not None:
+            pre = np.asarray(preload, dtype=float).ravel()
+            if pre.size not in (3, 6) or not np.all(np.isfinite(pre)):
+                raise ModelError(
+                    "`preload` must be 3 (force) or 6 (force, moment) finite numbers, "
+                    f"got {preload!r}"
+                )
+            if frame is not None or speeds is not None:
+                raise ModelError("`preload`: only for constant joints in the inertial frame")
+            pre = np.concatenate([pre, np.zeros(6 - pre.size)])
         table = None
         if speeds is None:
             K = expand_matrix(stiffness, components, "stiffness")
@@ -569,7 +591,129 @@ class Model:
             components=None if components is None else list(components),
             offset=None if offset is None else [float(v) for v in offset],
             other_offset=None if other_offset is None else [float(v) for v in other_offset],
+            preload=pre,
         )
+
+    @_recorded
+    def add_rolling_bearing(
+        self,
+        name: str,
+        body: str,
+        node: int,
+        law: str = "elements",
+        kind: str = "ball",
+        stiffness: float = 0.0,
+        elements: int = 0,
+        clearance: float = 0.0,
+        angle: float = 0.0,
+        deflection: Sequence[float] | None = None,
+        force: Sequence[float] | None = None,
+        damping: float = 0.0,
+        other_body: str | None = None,
+        other_node: int | None = None,
+    ) -> None:
+        """A rolling-element bearing whose radial stiffness depends on its load.
+
+        ``law``: ``"elements"`` (``elements`` rolling elements, each with the Hertz law
+        ``Q = stiffness <delta - clearance>^n``, ``n`` 3/2 for ``kind="ball"``, 10/9 for
+        ``"roller"``; ``angle`` places element 0), ``"radial"`` (one lumped law
+        ``|F| = stiffness <|d| - clearance>^n`` for the bearing) or ``"table"`` (radial
+        ``force`` [N] against ``deflection`` [m]); see :mod:`rheolin.mechanics.rolling`.
+        The force acts in the bearing plane (normal to the body's axis) on the node's motion
+        relative to ground or to ``other_node``; ``damping`` [N s/m] is a constant radial
+        damping. The model is then solved about its operating point (static equilibrium
+        under gravity, static forces and torques; :mod:`rheolin.preload`), where this bearing
+        becomes a linear joint with its tangent stiffness.
+
+        >>> m = Model()
+        >>> m.add_shaft("s", [0.0, 0.2], outer_diameter=0.04, material="steel")
+        >>> m.add_rolling_bearing("a", "s", 0, kind="ball", stiffness=8e9, elements=9)
+        >>> sorted(m.rolling)
+        ['a']
+        """
+        from .rolling import RollingLaw
+
+        self._new_joint(name)
+        b = self._body(body, "body")
+        self._node(b, node)
+        if (other_body is None) != (other_node is None):
+            raise ModelError("`other_body` and `other_node` must be given together")
+        if other_body is not None:
+            self._node(self._body(other_body, "other_body"), other_node)
+        rolling_law = RollingLaw(
+            law=law,
+            kind=kind,
+            stiffness=float(stiffness),
+            elements=elements,
+            clearance=float(clearance),
+            angle=float(angle),
+            deflection=None if deflection is None else np.asarray(deflection, float),
+            force_table=None if force is None else np.asarray(force, float),
+        )
+        if not (np.isfinite(damping) and damping >= 0):
+            raise ModelError(f"`damping` must be >= 0 [N s/m], got {damping!r}")
+        self.rolling[name] = dict(
+            body=body,
+            node=int(node),
+            other=(other_body, other_node),
+            law=rolling_law,
+            damping=float(damping),
+        )
+
+    @_recorded
+    def add_torque(self, name: str, body: str, node: int, torque: float | str = "reaction") -> None:
+        """A static torque [N m] about the body's axis at a node (positive: right-handed
+        about the axis): the input torque, or the output load. ``torque="reaction"``: the
+        torque that balances all the others on the free rotation of the drive train (the
+        output load of a gearbox driven by a given input torque). The model is then solved
+        about its operating point (:mod:`rheolin.preload`).
+
+        >>> m = Model()
+        >>> m.add_rigid_body("r", (0, 0, 0), 1.0, (1e-3, 1e-3, 2e-3))
+        >>> m.add_torque("input", "r", 0, 12.5)
+        >>> m.torques["input"]["torque"]
+        12.5
+        """
+        self._new_item(name, self.torques)
+        self._node(self._body(body, "body"), node)
+        if isinstance(torque, str):
+            if torque != "reaction":
+                raise ModelError(f"`torque` must be a number [N m] or 'reaction', got {torque!r}")
+        else:
+            try:
+                torque = float(torque)
+            except (TypeError, ValueError):
+                raise ModelError(
+                    f"`torque` must be a number [N m] or 'reaction', got {torque!r}"
+                ) from None
+            if not np.isfinite(torque):
+                raise ModelError(f"`torque` must be finite, got {torque!r}")
+        self.torques[name] = dict(body=body, node=int(node), torque=torque)
+
+    @property
+    def preloaded(self) -> bool:
+        """True when the model declares torques or load-dependent joints: it is solved about
+        its operating point (:meth:`operating_point`)."""
+        return bool(self.rolling or self.torques) or any(
+            g.get("load_law") is not None for g in self.meshes.values()
+        )
+
+    def operating_point(self, speed: float) -> Any:
+        """The static equilibrium under the model's static loads and torques at input
+        ``speed`` [rad/s], and the model linearized there
+        (:class:`rheolin.preload.OperatingPoint`); cached per speed."""
+        from ..preload import operating_point
+
+        key = (_positive(speed, "speed"), len(self.calls))  # a changed model: computed anew
+        if key not in self._operating:
+            if len(self._operating) > 64:
+                self._operating.clear()
+            self._operating[key] = operating_point(self, key[0])
+        return self._operating[key]
+
+    def _new_joint(self, name: str) -> None:
+        self._new_item(name, self.joints)
+        self._new_item(name, self.rolling)
 
     def bearing_coefficients(
         self, name: str, speed: float
@@ -604,6 +748,10 @@ class Model:
         transmission_error: dict[int, complex] | None = None,
         side: int = 1,
         center_direction: Sequence[float] | None = None,
+        load_law: str | None = None,
+        face_width: float | None = None,
+        load_forces: Sequence[float] | None = None,
+        load_stiffness: Sequence[float] | None = None,
     ) -> None:
         """An external spur/helical mesh between parallel axes.
 
@@ -614,6 +762,13 @@ class Model:
         ``{j: e_j}`` [m]: the static (unloaded) transmission error, entering as the load
         ``k(t) e(t)`` on the line of action; the mesh damping acts on the dynamic deflection
         rate only (Ozguven & Houser). ``side`` selects the flank (see ``gears.line_of_action``).
+
+        Load-dependent stiffness (:class:`~rheolin.mechanics.rolling.MeshLoadLaw`): the mean
+        stiffness becomes ``k(F)`` of the static mesh force, by ``load_law="iso6336"`` (with
+        ``face_width`` [m]: ISO 6336-1's reduction below 100 N/mm) or ``"table"``
+        (``load_stiffness`` [N/m] at ``load_forces`` [N]); the whole stiffness function is
+        scaled by the operating (tangent) stiffness over its mean. The model is then solved
+        about its operating point (:mod:`rheolin.preload`).
         """
         self._new_item(name, self.meshes)
         for fld, bname, node in (
@@ -636,6 +791,16 @@ class Model:
                 contact_ratio, single_stiffness, double_stiffness, stiffness_harmonics
             )
         _positive(module, "module")
+        mesh_law = None
+        if load_law is not None:
+            from .rolling import MeshLoadLaw
+
+            mesh_law = MeshLoadLaw(
+                law=load_law,
+                face_width=float(face_width or 0.0),
+                forces=None if load_forces is None else np.asarray(load_forces, float),
+                stiffness=None if load_stiffness is None else np.asarray(load_stiffness, float),
+            )
         self.meshes[name] = dict(
             pair=pair,
             pinion_node=pinion_node,
@@ -648,6 +813,7 @@ class Model:
             transmission_error=transmission_error,
             side=side,
             center_direction=center_direction,
+            load_law=mesh_law,
         )
 
     @_recorded
@@ -742,13 +908,22 @@ class Model:
         return model_speed_plan(self)
 
     def assemble(self, speed: float) -> Assembled:
-        """Assemble at input speed ``speed`` [rad/s] (> 0); see :class:`Assembled`."""
-        return assemble_model(self, _positive(speed, "speed"))
+        """Assemble at input speed ``speed`` [rad/s] (> 0); see :class:`Assembled`. A
+        :attr:`preloaded` model is assembled linearized about its operating point."""
+        speed = _positive(speed, "speed")
+        if self.preloaded:
+            return self.operating_point(speed).model.assemble(speed)
+        return assemble_model(self, speed)
 
-    def speed_template(self) -> SpeedTemplate:
+    def speed_template(self) -> Any:
         """The model assembled once for many speeds (:class:`SpeedTemplate`): its
         ``assemble(speed)`` only scales the speed-dependent coefficients. Make a new one after
-        changing the model."""
+        changing the model. A :attr:`preloaded` model whose static stiffness does not
+        depend on the speed is linearized once; otherwise at each speed."""
+        if self.preloaded:
+            from ..preload import preloaded_template
+
+            return preloaded_template(self)
         return SpeedTemplate(self)
 
     def _body(self, name: str, field_name: str) -> _Body:

@@ -95,6 +95,9 @@ def bearing_force_array(sol: Solution, a: Assembled, name: str) -> tuple[np.ndar
             s = 1j * a.omega * n[hit].astype(float)
             acc += s[:, None] * (Qn @ np.asarray(term.D[k]).T)
         F[hit] += acc
+    pre = term.f.get(0)
+    if pre is not None:  # a preloaded joint: preload + K delta (the load on the node is -T^T p)
+        F[m == 0, :6] -= np.asarray(pre)[:6]
     return m, F[:, :6]
 
 

@@ -158,6 +158,15 @@ class SpeedTemplate:
             self.joints[name] = coupling_speed_term(
                 (dof[(j["body"], j["node"])], other), j["K"], j["D"], s, axis, j.get("M"), levers
             )
+            pre = j.get("preload")
+            if pre is not None:  # -T_a^T p on the node, +T_b^T p on the other one
+                Ta, Tb = (np.eye(6) if t is None else t for t in levers)
+                jt = self.joints[name]
+                fvec = np.zeros(jt.dofs.size)
+                fvec[:6] = -(Ta.T @ pre)
+                if other is not None:
+                    fvec[6:12] = Tb.T @ pre
+                jt.f = {0: {0: fvec}}
             table = j.get("table")
             if table is not None:  # zeros now: the pattern; values per speed in `system`
                 ratio = abs(float(plan.ratios[j["body"]]))

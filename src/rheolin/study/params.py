@@ -6,7 +6,8 @@ A path follows the TOML structure of the model file (``docs/model-format.md``,
 * an item of an array of tables is chosen by its ``name`` (``meshes.stage1``) or by its
   index (``shafts[0]``);
 * ``bearings.NAME`` is the bearing ``NAME`` wherever it sits (bearings are written under
-  their body: ``[[shafts.bearings]]``), ``bodies.NAME`` the shaft, rigid or condensed body;
+  their body: ``[[shafts.bearings]]``, ``[[shafts.rolling_bearings]]``), ``bodies.NAME``
+  the shaft, rigid or condensed body;
 * indices after the last key pick one entry of a list value (``stiffness[0][1]``,
   ``model.gravity[1]``); without them the value replaces the key's whole value, exactly as
   if it were written in the file (``bearings.input_A.stiffness = "2e8 N/m"`` makes that
@@ -295,7 +296,7 @@ def _named(
     path: str, kind: str, name: str, indices: list[int], doc: dict[str, Any]
 ) -> tuple[list[str | int], Any]:
     """Location and schema class of the bearing or body called ``name``."""
-    from ..io.schema import Bearing, Shaft
+    from ..io.schema import Bearing, RollingBearing, Shaft
 
     if indices:
         raise ParameterError(f"{path}: {kind}.NAME takes a name, not an index")
@@ -309,10 +310,11 @@ def _named(
                     cls = table_class(ModelFile.model_fields[table].annotation) or Shaft
                     found.append(([table, b], cls))
                 continue
-            for j, bearing in enumerate(body.get("bearings", [])):
-                names.append(str(bearing.get("name")))
-                if bearing.get("name") == name:
-                    found.append(([table, b, "bearings", j], Bearing))
+            for key, cls in (("bearings", Bearing), ("rolling_bearings", RollingBearing)):
+                for j, bearing in enumerate(body.get(key, [])):
+                    names.append(str(bearing.get("name")))
+                    if bearing.get("name") == name:
+                        found.append(([table, b, key, j], cls))
     what = "bearing" if kind == "bearings" else "body"
     if not found:
         raise ParameterError(f"{path}: no {what} named {name!r}; {kind}: {', '.join(names)}")
