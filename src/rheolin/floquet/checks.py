@@ -81,13 +81,22 @@ def _gershgorin(system: PeriodicSystem, avg: _Averaged, modes: list[int]) -> lis
     frequency ``lambda_j - i k w1``). Every Hill exponent lies in the union of the discs of
     radius ``R_j`` about the copies ``lambda_j - i h w1``, for any truncation."""
     n, w = system.n, system.omega
-    Tq, Tv = sp.diags_array(1.0 / avg.sq), sp.diags_array(1.0 / avg.sv)
     Wr = avg.W[:, modes].conj().T  # rows of the modal transform
     out = np.zeros(len(modes))
-    for k in system.coefficient_harmonics:
-        Kk = sp.csr_array(Tv @ sp.csr_array(system.K[k]) @ Tq) if k in system.K else None
-        Dk = sp.csr_array(Tv @ sp.csr_array(system.D[k]) @ Tv) if k in system.D else None
-        Mk = sp.csr_array(Tv @ sp.csr_array(system.M[k]) @ Tv) if k in system.M else None
+    cached = getattr(avg, "_gershgorin_terms", None)
+    if cached is None or cached[0] is not system:  # the balanced couplings, once per system
+        Tq, Tv = sp.diags_array(1.0 / avg.sq), sp.diags_array(1.0 / avg.sv)
+        terms = []
+        for k in system.coefficient_harmonics:
+            terms.append((
+                k,
+                sp.csc_array(Tv @ sp.csr_array(system.K[k]) @ Tq) if k in system.K else None,
+                sp.csc_array(Tv @ sp.csr_array(system.D[k]) @ Tv) if k in system.D else None,
+                sp.csc_array(Tv @ sp.csr_array(system.M[k]) @ Tv) if k in system.M else None,
+            ))  # fmt: skip
+        cached = (system, terms)
+        avg._gershgorin_terms = cached  # type: ignore[attr-defined]
+    for k, Kk, Dk, Mk in cached[1]:
         low = Wr[:, n:]  # the couplings act on the v rows
         part = np.zeros((len(modes), 2 * n), dtype=complex)
         if Kk is not None:
