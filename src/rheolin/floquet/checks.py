@@ -46,10 +46,14 @@ class _Outer:
             return float("inf")
         s_o = lam + 1j * w * self.O.astype(float)
         if self.avg.modal:
-            Ga = a[:, self.cols] @ self.Xq
-            Gr = r[:, self.rows] @ self.Wv
+            ac, rr = a[:, self.cols], r[:, self.rows]
+            # outer harmonics that both couplings reach (a third of them are exact zeros on
+            # the gearbox: they add nothing)
+            both = np.flatnonzero(np.any(ac != 0, axis=1) & np.any(rr != 0, axis=1))
+            Ga = ac[both] @ self.Xq
+            Gr = rr[both] @ self.Wv
             with np.errstate(divide="ignore", invalid="ignore"):
-                term = -np.sum(Ga * Gr / (self.avg.lam[None, :] - s_o[:, None]))
+                term = -np.sum(Ga * Gr / (self.avg.lam[None, :] - s_o[both, None]))
         else:
             term = self._direct(a, r, s_o)
         val = abs(term / den)
