@@ -538,13 +538,7 @@ class Model:
         >>> float(m.bearing_coefficients("b", 200.0)[0][0, 1])
         3000000.0
         """
-        self._new_joint(name)
-        b = self._body(body, "body")
-        self._node(b, node)
-        if (other_body is None) != (other_node is None):
-            raise ModelError("`other_body` and `other_node` must be given together")
-        if other_body is not None:
-            self._node(self._body(other_body, "other_body"), other_node)
+        self._joint_nodes(name, body, node, other_body, other_node)
         if frame is not None:
             self._body(frame, "frame")
         if frame is not None and (offset is not None or other_offset is not None):
@@ -633,13 +627,7 @@ class Model:
         """
         from .rolling import RollingLaw
 
-        self._new_joint(name)
-        b = self._body(body, "body")
-        self._node(b, node)
-        if (other_body is None) != (other_node is None):
-            raise ModelError("`other_body` and `other_node` must be given together")
-        if other_body is not None:
-            self._node(self._body(other_body, "other_body"), other_node)
+        self._joint_nodes(name, body, node, other_body, other_node)
         rolling_law = RollingLaw(
             law=law,
             kind=kind,
@@ -714,6 +702,17 @@ class Model:
     def _new_joint(self, name: str) -> None:
         self._new_item(name, self.joints)
         self._new_item(name, self.rolling)
+
+    def _joint_nodes(
+        self, name: str, body: str, node: int, other_body: str | None, other_node: int | None
+    ) -> None:
+        """Check a new joint's name and nodes (``other_*``: the other side, or ground)."""
+        self._new_joint(name)
+        self._node(self._body(body, "body"), node)
+        if (other_body is None) != (other_node is None):
+            raise ModelError("`other_body` and `other_node` must be given together")
+        if other_body is not None:
+            self._node(self._body(other_body, "other_body"), other_node)
 
     def bearing_coefficients(
         self, name: str, speed: float
