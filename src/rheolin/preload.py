@@ -590,17 +590,37 @@ class _PerSpeedTemplate:
         return self.model.assemble(speed)
 
 
-def preloaded_template(model: Any) -> Any:
-    """``model.speed_template()`` of a preloaded model: one linearization when its static
-    problem does not depend on the speed (no speed-dependent mean stiffness or static load),
-    else one per speed."""
+def speed_independent(model: Any) -> bool:
+    """True when the static problem of a preloaded model does not depend on the speed (no
+    speed tables, no speed-dependent mean stiffness or static load): one operating point
+    serves every speed."""
     from .mechanics.template import SpeedTemplate
 
     base = SpeedTemplate(_base(model))
     K = base._K.patterns.get(0)
     still = not base.tables and (K is None or not np.any(K[2][1:]))
     f = base.load_polynomials().get(0)
-    still = still and (f is None or not np.any(f[1:]))
-    if still:
+    return bool(still and (f is None or not np.any(f[1:])))
+
+
+def linearized(model: Any) -> Any:
+    """The model linearized at its operating point, for analyses over speed that edit or
+    inspect a model's joints (the critical-speed map); a model that is not preloaded is
+    returned as it is. Refused when the operating point changes with the speed."""
+    if not model.preloaded:
+        return model
+    if not speed_independent(model):
+        raise ModelError(
+            "this preloaded model's operating point changes with the speed (speed-dependent "
+            "stiffness or static load): use the Campbell diagram (rheolin campbell), which "
+            "linearizes at every speed"
+        )
+    return model.operating_point(1.0).model
+
+
+def preloaded_template(model: Any) -> Any:
+    """``model.speed_template()`` of a preloaded model: one linearization when its static
+    problem does not depend on the speed, else one per speed."""
+    if speed_independent(model):
         return model.operating_point(1.0).model.speed_template()
     return _PerSpeedTemplate(model)

@@ -282,3 +282,19 @@ def test_preload_of_a_linear_joint() -> None:
     assert q0[1] == pytest.approx((W - p) / k, rel=1e-12)
     _, F = bearing_force_array(sol, a, "s")
     assert np.real(F[0, 1]) == pytest.approx(W, rel=1e-12)
+
+
+def test_critical_speed_map_of_a_preloaded_model_uses_the_operating_stiffness() -> None:
+    """The map's "model's own stiffness" of a rolling bearing is its operating stiffness, the
+    mean of the vertical tangent and horizontal secant of the Hertz law at the lever-rule
+    load; the map is that of the linearized model."""
+    from rheolin.stability.critical_map import critical_speed_map
+
+    law = dict(law="radial", kind="ball", stiffness=HERTZ)
+    m = _rigid_shaft(law, law)
+    cmap = critical_speed_map(m, [1e6, 1e7])
+    R = 20.0 * G * 0.35 / 0.5
+    delta = (R / HERTZ) ** (2 / 3)
+    assert cmap.actual["A"] == pytest.approx((1.5 + 1.0) / 2 * HERTZ * delta**0.5, rel=1e-9)
+    again = critical_speed_map(m.operating_point(1.0).model, [1e6, 1e7])
+    assert np.allclose(cmap.speeds, again.speeds, equal_nan=True)

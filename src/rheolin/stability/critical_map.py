@@ -224,9 +224,13 @@ def critical_speed_map(
     ``stiffness`` [N/m] in turn: isotropic across the bearing's body axis, no cross-coupling,
     no damping; their axial and rotational terms are kept. The model itself is not changed.
     """
+    from ..preload import linearized
+
     k = np.asarray(stiffness, dtype=float).ravel()
     if k.size == 0 or not np.all(np.isfinite(k)) or np.any(k <= 0):
         raise ModelError("stiffness: need one or more finite values > 0 [N/m]")
+    # a preloaded model: its rolling bearings at their operating stiffness, as linear joints
+    model = linearized(model)
     names = _ground_bearings(model) if bearings is None else list(bearings)
     for b in names:
         if b not in model.joints:
