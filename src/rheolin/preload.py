@@ -557,18 +557,22 @@ def _linearized(
             if ms is None:
                 return [(method, kw)]
             g = model.meshes[kw["name"]]
-            st = g["stiffness"]
-            stiff = dict(st) if isinstance(st, dict) else {0: float(st)}
             ratio = ms.stiffness / ms.nominal
             te = dict(g["transmission_error"] or {})
             te[0] = te.get(0, 0.0) + (ms.deflection - ms.force / ms.stiffness)
-            kw.update(
-                stiffness={j: v * ratio for j, v in stiff.items()},
-                contact_ratio=None,
-                single_stiffness=None,
-                double_stiffness=None,
-                transmission_error=te,
-            )
+            # the stiffness function scaled as it was given (a mean, a Fourier series, or the
+            # rectangular wave's two levels): the model file can still say it
+            given = kw.get("stiffness")
+            if given is not None:
+                kw["stiffness"] = (
+                    {j: v * ratio for j, v in given.items()}
+                    if isinstance(given, dict)
+                    else given * ratio
+                )
+            for key in ("single_stiffness", "double_stiffness"):
+                if kw.get(key) is not None:
+                    kw[key] = kw[key] * ratio
+            kw["transmission_error"] = te
             return [(method, kw)]
         return [(method, kw)]
 

@@ -96,3 +96,24 @@ def test_a_study_varies_the_torque_and_a_rolling_bearing() -> None:
         assert model.rolling["pA"]["law"].clearance == pytest.approx(10e-6)
         op = model.operating_point(100.0)
         assert op.meshes["m1"].force == pytest.approx(T / rb1, rel=1e-9)
+
+
+def test_linearized_model_file_keeps_the_preloads(tmp_path: Path) -> None:
+    """The linearized model (linear joints with ``preload``) written as a model file and
+    reloaded: the same static response and the same bearing forces."""
+    import rheolin as rl
+    from rheolin.io import load_model
+    from rheolin.mechanics.outputs import bearing_force_array
+
+    (tmp_path / "pair.toml").write_text(PAIR)
+    lin = load_model(tmp_path / "pair.toml").operating_point(100.0).model
+    lin.to_toml(tmp_path / "lin.toml")
+    again = load_model(tmp_path / "lin.toml")
+    assert not again.preloaded and again.joints["pA"]["preload"] is not None
+    out = []
+    for m in (lin, again):
+        a = m.assemble(100.0)
+        sol = rl.solve(a.system, [0])
+        out.append((np.real(sol.q[0]), np.real(bearing_force_array(sol, a, "pA")[1][0])))
+    assert np.abs(out[0][0] - out[1][0]).max() <= 1e-12 * np.abs(out[0][0]).max()
+    assert np.abs(out[0][1] - out[1][1]).max() <= 1e-9 * np.abs(out[0][1]).max()

@@ -298,3 +298,28 @@ def test_critical_speed_map_of_a_preloaded_model_uses_the_operating_stiffness() 
     assert cmap.actual["A"] == pytest.approx((1.5 + 1.0) / 2 * HERTZ * delta**0.5, rel=1e-9)
     again = critical_speed_map(m.operating_point(1.0).model, [1e6, 1e7])
     assert np.allclose(cmap.speeds, again.speeds, equal_nan=True)
+
+
+def test_a_rectangular_wave_mesh_is_scaled_to_its_operating_stiffness() -> None:
+    """A mesh given by its single/double tooth-pair levels: the linearized model keeps the
+    wave (both levels scaled), its mean is the tangent stiffness, and the relative ripple
+    ``k_j / k_0`` is unchanged."""
+    z1, z2, mod = 20, 50, 0.004
+    m = Model()
+    m.add_rigid_body("p", (0, 0, 0), 0.5, (1e-4, 1e-4, 2e-3))
+    m.add_rigid_body("g", (mod * (z1 + z2) / 2, 0, 0), 3.0, (1e-2, 1e-2, 0.05))
+    for body in ("p", "g"):
+        m.add_bearing(f"{body}_b", body, 0, stiffness=1e10,
+                      components=["ux", "uy", "uz", "phix", "phiy"])  # fmt: skip
+    m.add_gear_mesh("mesh", "p", 0, "g", 0, z1, z2, mod, contact_ratio=1.6,
+                    single_stiffness=3e8, double_stiffness=5e8, load_law="table",
+                    load_forces=[0.0, 500.0, 2000.0], load_stiffness=[2e8, 3e8, 4.2e8])  # fmt: skip
+    m.add_torque("input", "p", 0, 15.0)
+    m.add_torque("load", "g", 0, "reaction")
+    op = m.operating_point(10.0)
+    before, after = m.meshes["mesh"]["stiffness"], op.model.meshes["mesh"]["stiffness"]
+    ms = op.meshes["mesh"]
+    assert np.real(after[0]) == pytest.approx(ms.stiffness, rel=1e-12)
+    assert ms.nominal == pytest.approx(np.real(before[0]), rel=1e-12)
+    for j in (1, 2, 3):
+        assert after[j] / after[0] == pytest.approx(before[j] / before[0], rel=1e-12)

@@ -194,6 +194,21 @@ def _vec3(value: Any, path: str) -> list[float] | None:
     return [float(v) for v in value]
 
 
+def _preload(value: Any, path: str) -> list[float] | None:
+    """A joint's preload: force (3) or force and moment (6), numbers (SI) or quantities."""
+    if value is None:
+        return None
+    if not isinstance(value, list) or len(value) not in (3, 6):
+        raise ModelError(f"{path}: give 3 forces or 3 forces and 3 moments, got {value!r}")
+    out = []
+    for i, x in enumerate(value):
+        try:
+            out.append(to_si(x, "force" if i < 3 else "moment"))
+        except UnitError as exc:
+            raise ModelError(f"{path}[{i}]: {exc}") from None
+    return out
+
+
 def _one(value: Any) -> Any:
     """A one-entry list as its value (per shaft), a longer one as is (per element)."""
     return value[0] if isinstance(value, list) and len(value) == 1 else value
@@ -465,6 +480,7 @@ class _Builder:
             extrapolate=j.extrapolate,
             offset=_vec3(j.offset, f"{p}.offset"),
             other_offset=_vec3(j.other_offset, f"{p}.other_offset"),
+            preload=_preload(j.preload, f"{p}.preload"),
         )
 
     def _journal(self, body: str, j: Bearing, p: str) -> None:
@@ -528,7 +544,13 @@ class _Builder:
                 f"{p}.stiffness: give `stiffness` (mean), or `contact_ratio`, "
                 "`single_stiffness` and `double_stiffness` (rectangular wave)"
             )
-        te = {t.harmonic: t.amplitude / 2 * np.exp(1j * t.phase) for t in m.transmission_error}
+        te = {
+            t.harmonic: (
+                t.amplitude * np.cos(t.phase) if t.harmonic == 0
+                else t.amplitude / 2 * np.exp(1j * t.phase)
+            )
+            for t in m.transmission_error
+        }  # fmt: skip
         kw = m.model_dump(exclude={"name", "transmission_error", "stiffness"})
         self._call(
             p,

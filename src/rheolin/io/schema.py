@@ -302,6 +302,7 @@ class Bearing(_Strict):
     extrapolate: bool = False
     offset: VecLength | None = None
     other_offset: VecLength | None = None
+    preload: list[Any] | None = None
     journal: Journal | None = None
 
     @model_validator(mode="after")
@@ -479,9 +480,10 @@ class CondensedBody(_Body):
 
 
 class TransmissionError(_Strict):
-    """One harmonic ``amplitude cos(harmonic W_mesh t + phase)`` of the static TE."""
+    """One harmonic ``amplitude cos(harmonic W_mesh t + phase)`` of the static TE; harmonic
+    0 is a constant offset ``amplitude cos(phase)`` (phase 0 or 180 deg)."""
 
-    harmonic: int = Field(ge=1, strict=True)
+    harmonic: int = Field(ge=0, strict=True)
     amplitude: LengthNonNeg
     phase: Angle = 0.0
 

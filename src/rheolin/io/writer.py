@@ -128,9 +128,11 @@ def model_to_toml(model: Any, path: str | Path | None = None) -> str:
                 )
             te = call.get("transmission_error") or {}
             t["transmission_error"] = [
-                {"harmonic": int(j), "amplitude": 2 * abs(e), "phase": float(np.angle(e))}
+                {"harmonic": 0, "amplitude": abs(float(np.real(e))),
+                 "phase": 0.0 if np.real(e) >= 0 else float(np.pi)} if j == 0
+                else {"harmonic": int(j), "amplitude": 2 * abs(e), "phase": float(np.angle(e))}
                 for j, e in te.items()
-            ]
+            ]  # fmt: skip
             lists["meshes"].append(t)
         elif method == "add_force":
             lists["forces"].append(_args(call))
