@@ -134,11 +134,23 @@ def _candidates(Ks: Any, n: int) -> tuple[np.ndarray, np.ndarray, float]:
     return lam, V, scale
 
 
+#: Inverse iteration of the candidates: the shift in units of round-off of the largest
+#: stiffness (``eps * scale``; a shift this small makes ``Ks + shift I`` nearly singular,
+#: which inverse iteration wants, but not exactly), and the steps. A shift of ``1e-9 scale``
+#: (before) sat above the softest elastic mode of a gear pair on 1e12-1e13 N/m supports with
+#: nearly massless hubs (mass-scaled 3.7e8 against a shift of 1e12-1e13): the iteration could
+#: not separate the drive train's free rotation from it, and the rotation was missed. Beyond
+#: about 1e8 between the stiffest and the softest mass-scaled stiffness the rounding of the
+#: stiffest part hides the softest mode, and no shift can separate them.
+_REFINE_SHIFT = 10.0
+_REFINE_STEPS = 8
+
+
 def _refined(Ks: Any, V: np.ndarray, scale: float, sparse: bool) -> np.ndarray:
-    """Two steps of inverse iteration near zero, then Rayleigh-Ritz: null vectors accurate
-    to round-off of the local stiffness, whatever the stiffest part of the model."""
+    """Inverse iteration just above round-off of zero, then Rayleigh-Ritz: null vectors
+    accurate to round-off of the local stiffness, whatever the stiffest part of the model."""
     n = V.shape[0]
-    shift = 1e-9 * scale
+    shift = _REFINE_SHIFT * np.finfo(float).eps * scale
     if sparse:
         lu = spla.splu(sp.csc_array(Ks + shift * sp.eye_array(n)))
         solve = lu.solve
@@ -146,7 +158,7 @@ def _refined(Ks: Any, V: np.ndarray, scale: float, sparse: bool) -> np.ndarray:
         f = sla.lu_factor(np.asarray(Ks) + shift * np.eye(n))
         solve = lambda b: sla.lu_solve(f, b)  # noqa: E731
     X = V
-    for _ in range(2):
+    for _ in range(_REFINE_STEPS):
         X, _r = np.linalg.qr(solve(X))
     H = X.T @ np.asarray(Ks @ X)
     _, Y = np.linalg.eigh(0.5 * (H + H.T))

@@ -192,3 +192,26 @@ def test_soft_springs_on_nearly_massless_nodes_are_not_free_motions() -> None:
     x = p.solution.harmonic(1)[p.assembled.dofs("s", 1)[0]]
     ref = U * W**2 / (2 * k - m * W**2)
     assert abs(2 * abs(x) - ref) < 1e-4 * ref  # the shaft's own compliance: 2k / 3e10 = 6e-6
+
+
+@pytest.mark.parametrize("support", [1e12, 1e13])
+def test_free_rotation_of_a_gear_pair_on_stiff_supports_with_light_hubs(support: float) -> None:
+    """A spur pair (20:50, module 4 mm) whose hubs weigh 1e-6 kg on 1e12-1e13 N/m supports:
+    its free rotation is found (it was missed: the inverse iteration's shift sat above the
+    softest elastic mode), with the gear-ratio shape ``phi_g / phi_p = -z1 / z2``."""
+    from rheolin.mechanics.model import Model
+
+    z1, z2, mod = 20, 50, 0.004
+    m = Model()
+    m.add_rigid_body("p", (0, 0, 0), 1e-6, (1e-9, 1e-9, 2e-3))
+    m.add_rigid_body("g", (mod * (z1 + z2) / 2, 0, 0), 1e-6, (1e-9, 1e-9, 0.05))
+    for body in ("p", "g"):
+        m.add_bearing(f"{body}_b", body, 0, stiffness=support,
+                      components=["ux", "uy", "uz", "phix", "phiy"])  # fmt: skip
+    m.add_gear_mesh("mesh", "p", 0, "g", 0, z1, z2, mod, stiffness=4.2e8)
+    a = m.assemble(10.0)
+    rigid = find_rigid_modes(a.system)
+    assert rigid is not None and rigid.count == 1
+    r = rigid.modes[:, 0]
+    phi_p, phi_g = r[a.dofs("p", 0)[5]], r[a.dofs("g", 0)[5]]
+    assert phi_g / phi_p == pytest.approx(-z1 / z2, rel=1e-9)
