@@ -44,6 +44,7 @@ from ._cli_frf import register as _register_frf
 from ._cli_modes import register as _register_modes
 from ._cli_report import parse_speed, parse_speeds, print_summary
 from ._cli_ross import register as _register_ross
+from .errors import ModelError
 from .harmonics import TruncationWarning
 
 app = typer.Typer(
@@ -223,6 +224,20 @@ def validate(model: Path = MODEL) -> None:
         f"{m.speed_plan().base} x input speed; {info.describe()}",
         markup=False,
     )
+    if m.preloaded:  # the static equilibrium must exist (at the file's speed, if it has one)
+        speed = lm.spec.model.speed or 1.0
+        try:
+            op = m.operating_point(speed)
+        except ModelError as exc:
+            raise _fail(f"{model}: {exc}") from None
+        peak, (body, node) = op.max_displacement()
+        console.print(
+            f"preloaded: {len(m.rolling)} rolling bearings, {len(m.torques)} torques, "
+            f"{sum(g.get('load_law') is not None for g in m.meshes.values())} load-dependent "
+            f"meshes; static equilibrium found ({op.iterations} Newton iterations; largest "
+            f"deflection {peak * 1e6:.3g} um at {body} node {node})",
+            markup=False,
+        )
 
 
 @app.command()

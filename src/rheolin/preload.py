@@ -398,6 +398,7 @@ def operating_point(model: Any, speed: float) -> OperatingPoint:
     r_end, _ = evaluate(y, 1.0, False)
     residual = float(np.linalg.norm(weight * r_end)) / scale
 
+    _plausible(model, bear, u, a)
     # joint states and the linearized model
     bstates: dict[str, BearingState] = {}
     for name, law, B, E, _ in bear:
@@ -516,6 +517,47 @@ def _diagnose(model: Any, bear: list, u: np.ndarray, lam: float, last: tuple[flo
     if meshes:
         return f"{head}; check the load law of mesh {meshes[0]!r}"
     return head
+
+
+#: A static deflection beyond this fraction of the model's size is not a small-deflection
+#: operating point (the linear theory of every joint and body is void there).
+MAX_DEFLECTION = 1e-2
+
+
+def _plausible(model: Any, bear: list, u: np.ndarray, a: Any) -> None:
+    """Refuse an equilibrium the laws cannot vouch for: a table bearing beyond its table, or
+    a deflection that is not small against the model (a joint that cannot carry its load lets
+    the linear rest of the model find a far-away balance)."""
+    for name, law, B, _, _ in bear:
+        if law.law == "table":
+            r = float(np.hypot(*(B @ u)))
+            end = float(law.deflection[-1])
+            if r > end * (1 + 1e-9):
+                raise ModelError(
+                    f"bearing {name!r} operates at {r * 1e6:.4g} um radial deflection, beyond "
+                    f"its table (up to {end * 1e6:.4g} um, {law.force_table[-1]:.4g} N): it "
+                    "cannot carry its load on the table; extend the table or check the load"
+                )
+    positions = np.concatenate([b.positions for b in model.bodies.values()])
+    size = float(np.ptp(positions, axis=0).max()) if len(positions) > 1 else 0.0
+    peak, where = 0.0, ("", -1)
+    for key, i in a.node_index.items():
+        v = float(np.linalg.norm(u[6 * i : 6 * i + 3]))
+        if v > peak:
+            peak, where = v, key
+    if size > 0 and peak > MAX_DEFLECTION * size:
+        worst = max(bear, key=lambda b: float(np.hypot(*(b[2] @ u))), default=None)
+        blame = (
+            f"; bearing {worst[0]!r} deflects {float(np.hypot(*(worst[2] @ u))) * 1e3:.4g} mm"
+            if worst is not None
+            else ""
+        )
+        raise ModelError(
+            f"static equilibrium at an implausible deflection: {peak * 1e3:.4g} mm at "
+            f"{where[0]} node {where[1]}, {peak / size:.3g} of the model's size{blame}: a "
+            "joint cannot carry its load (a small-deflection operating point needs below "
+            f"{MAX_DEFLECTION:.0%})"
+        )
 
 
 def _linearized(

@@ -117,3 +117,18 @@ def test_linearized_model_file_keeps_the_preloads(tmp_path: Path) -> None:
         out.append((np.real(sol.q[0]), np.real(bearing_force_array(sol, a, "pA")[1][0])))
     assert np.abs(out[0][0] - out[1][0]).max() <= 1e-12 * np.abs(out[0][0]).max()
     assert np.abs(out[0][1] - out[1][1]).max() <= 1e-9 * np.abs(out[0][1]).max()
+
+
+def test_validate_finds_the_static_equilibrium_or_names_the_joint(tmp_path: Path) -> None:
+    """``rheolin validate`` on a preloaded file solves its static equilibrium: found for the
+    example; a pinion bearing whose table saturates below its load exits 2 naming it."""
+    (tmp_path / "ok.toml").write_text(PAIR)
+    res = cli("validate", str(tmp_path / "ok.toml"))
+    assert res.returncode == 0 and "static equilibrium found" in res.stdout, res.stderr
+    old = 'name = "pB"\nnode = 2\nlaw = "radial"\nkind = "roller"\nstiffness = "1.5e9 N/m^(10/9)"'
+    new = ('name = "pB"\nnode = 2\nlaw = "table"\ndeflection = "0 10 20 30 um"\n'
+           'force = "0 40 50 50 N"')  # fmt: skip
+    assert old in PAIR
+    (tmp_path / "weak.toml").write_text(PAIR.replace(old, new))
+    res = cli("validate", str(tmp_path / "weak.toml"))
+    assert res.returncode == 2 and "'pB'" in res.stderr and "Traceback" not in res.stderr

@@ -205,9 +205,15 @@ def _whirl_maps(model: Any, built: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _ground_bearings(model: Any) -> list[str]:
+    """Bearings to ground with a transverse stiffness (an axial or torsional support alone
+    is not one: giving it a transverse stiffness would add a support)."""
     out = []
     for name, j in model.joints.items():
-        if j["other"][0] is None and j["table"] is None and np.abs(j["K"][:3, :3]).max() > 0:
+        if j["other"][0] is not None or j["table"] is not None:
+            continue
+        e = np.asarray(model.bodies[j["body"]].axis, float)
+        P = np.eye(3) - np.outer(e, e) / (e @ e)
+        if np.abs(P @ np.asarray(j["K"])[:3, :3] @ P).max() > 0:
             out.append(name)
     return out
 
