@@ -183,6 +183,14 @@ def test_critical_speed_map_of_a_rigid_rotor_is_the_closed_form() -> None:
         np.testing.assert_allclose(r.speeds[i, :2], ref, rtol=1e-10)
         assert np.isnan(r.speeds[i, 2])  # nothing else whirls forward (torsion is free)
     assert r.actual == {"b": 1e6}
+    # an axial/torsional support beside it is not a transverse bearing: not varied (giving
+    # it the map's transverse stiffness would add a second support and change the closed form)
+    m.add_bearing("thrust", "rotor", 0, [1e7, 1e3], components=["uz", "phiz"])
+    again = critical_speed_map(m, k)
+    assert again.bearings == ["b"]
+    for i, ki in enumerate(k):
+        ref = np.sort([np.sqrt(ki / mass), tilt])
+        np.testing.assert_allclose(again.speeds[i, :2], ref, rtol=1e-10)
 
 
 def test_critical_speed_map_limits_and_the_campbell_crossings() -> None:
