@@ -196,7 +196,7 @@ def print_operating_point(console: Console, op: dict[str, Any]) -> None:
     rows = []
     for name, b in op["bearings"].items():
         K = [[float(x) for x in row] for row in b["stiffness_N_per_m"]]
-        eig = sorted(abs(float(x)) for x in _eig2(K))
+        eig = sorted(abs(float(x)) for x in _principal(K))
         contact = f"{b['in_contact']} of {b['elements']}" if b["elements"] else (
             "yes" if b["in_contact"] else "no")  # fmt: skip
         rows.append((escape(name), f"{b['load_N']:.4g}", _um(_norm(b["deflection_m"])),
@@ -229,7 +229,7 @@ def _norm(v: Any) -> float:
     return math.sqrt(sum(float(x) ** 2 for x in v))
 
 
-def _eig2(K: list[list[float]]) -> list[float]:
+def _principal(K: list[list[float]]) -> list[float]:
     """Eigenvalues of the symmetric part of a 3x3 stiffness (bearing plane and axis)."""
     import numpy as np
 

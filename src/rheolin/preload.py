@@ -47,6 +47,7 @@ import scipy.sparse.linalg as spla
 
 from .errors import ModelError
 from .mechanics.joints import COMPONENTS
+from .mechanics.rotation import transverse_basis
 from .rigid_modes import find_rigid_modes
 from .system import PeriodicSystem
 
@@ -223,13 +224,9 @@ def _base(model: Any) -> Any:
 
 
 def _plane(axis: Any) -> np.ndarray:
-    """Two unit vectors spanning the plane normal to ``axis`` (3 x 2): x and y for z."""
-    e = np.asarray(axis, dtype=float)
-    e = e / np.linalg.norm(e)
-    ref = np.array([1.0, 0.0, 0.0]) if abs(e[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    e1 = ref - e * (ref @ e)
-    e1 /= np.linalg.norm(e1)
-    return np.column_stack([e1, np.cross(e, e1)])
+    """The bearing plane's axes (3 x 2), right-handed about ``axis``: x and y for z."""
+    a, b = transverse_basis(axis)
+    return np.column_stack([-b, a])
 
 
 # --------------------------------------------------------------------------- the solve
@@ -289,9 +286,12 @@ def operating_point(model: Any, speed: float) -> OperatingPoint:
         if system.constraint is not None
         else sp.identity(n, format="csr")
     )
-    Kref = K0.copy()
+    # the bearings' reference stiffness (their tangent at 1 um): the rigid-mode search, the
+    # first guess and the regularization of singular steps
+    Kjoints = sp.csr_array((n, n))
     for _, law, B, _, _ in bear:
-        Kref = Kref + law.reference_stiffness() * sp.csr_array(B.T @ B)
+        Kjoints = Kjoints + law.reference_stiffness() * sp.csr_array(B.T @ B)
+    Kref = K0 + Kjoints
     reduced = PeriodicSystem(
         system.omega,
         M={0: sp.csc_array(T1.T @ M0 @ T1)},
@@ -342,9 +342,7 @@ def operating_point(model: Any, speed: float) -> OperatingPoint:
                 shape=(T.shape[1], T.shape[1]),
             )
         )
-    Kreg = sp.csc_array((T.shape[1], T.shape[1]))
-    for (_, law, _, _, _), Bj in zip(bear, Br, strict=True):
-        Kreg = Kreg + law.reference_stiffness() * sp.csc_array(Bj.T @ Bj)
+    Kreg = sp.csc_array(Tt @ Kjoints @ T)
     for (_, _, _, k0), Wj in zip(mesh, ww, strict=True):
         Kreg = Kreg + k0 * Wj
 

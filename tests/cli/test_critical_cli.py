@@ -4,9 +4,7 @@ speed grid), the map reopens, and a bad stiffness range exits 2 naming the optio
 
 from __future__ import annotations
 
-import os
 import re
-import subprocess
 import sys
 from pathlib import Path
 
@@ -18,19 +16,8 @@ from rheolin.io import parse_model
 from rheolin.stability import campbell
 
 sys.path.insert(0, str(Path(__file__).parent))
+from test_frf_cli import cli
 from test_modes_cli import ROTOR
-
-ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "COLUMNS": "160"}
-
-
-def cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "rheolin.cli", *args],
-        capture_output=True,
-        text=True,
-        env=ENV,
-        timeout=300,
-    )
 
 
 def test_critical_map_matches_the_campbell_crossing(tmp_path: Path) -> None:

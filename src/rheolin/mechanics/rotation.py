@@ -52,6 +52,21 @@ def unit_axis(axis: object, name: str = "axis") -> np.ndarray:
     return a / n
 
 
+def transverse_basis(axis: object) -> tuple[np.ndarray, np.ndarray]:
+    """Unit vectors ``(a, b)`` spanning the plane normal to ``axis``, right-handed about it
+    (``b = e x a``): ``a = e x x`` normalized (``e x y`` for an axis near x). A motion
+    ``a + i b`` whirls forward about the axis.
+
+    >>> a, b = transverse_basis([0, 0, 1.0])
+    >>> a.tolist(), b.tolist()
+    ([0.0, 1.0, 0.0], [-1.0, 0.0, 0.0])
+    """
+    e = unit_axis(axis)
+    a = np.cross(e, [1.0, 0.0, 0.0] if abs(e[0]) < 0.9 else [0.0, 1.0, 0.0])
+    a /= np.linalg.norm(a)
+    return a, np.cross(e, a)
+
+
 def skew(a: np.ndarray) -> np.ndarray:
     """Cross-product matrix ``[a]x`` (``skew(a) @ b == cross(a, b)``); ``a`` may be complex.
 

@@ -180,12 +180,7 @@ def _constrained(
 ) -> Solution:
     """Solve with the rigid-body modes held (:mod:`rheolin.rigid_modes`); the result is on
     every DOF of ``system``."""
-    if isinstance(x0, Solution):
-        x0 = dataclasses.replace(x0, q=rigid.restrict(x0.q))
-    elif x0 is not None:
-        x0 = rigid.restrict(np.asarray(x0))
-    sol = solve(rigid.reduce(system), hset, x0=x0, **kwargs)
-    sol.q = rigid.expand(sol.q)
+    sol = _reduced(rigid, system, hset, x0, kwargs)
     sol.message = f"{rigid.note(system)}; {sol.message}"
     sol.info["rigid_modes"] = rigid.count
     sol.info["rigid_dominant_dofs"] = rigid.dominant_dofs(system)
@@ -202,13 +197,26 @@ def _linked(
     """Solve with the system's exact constraints eliminated (:mod:`rheolin.constraints`);
     the result is on every DOF of ``system``."""
     c = system.constraint
+    sol = _reduced(c, system, hset, x0, kwargs)
+    sol.info["constrained_dofs"] = int(c.pivots.size)
+    return sol
+
+
+def _reduced(
+    c: Any,
+    system: PeriodicSystem,
+    hset: HarmonicSet,
+    x0: Solution | np.ndarray | None,
+    kwargs: dict[str, Any],
+) -> Solution:
+    """Solve the system reduced by the constraint ``c`` (a warm start restricted to its kept
+    DOFs) and expand the solution to every DOF."""
     if isinstance(x0, Solution):
         x0 = dataclasses.replace(x0, q=c.restrict(x0.q))
     elif x0 is not None:
         x0 = c.restrict(np.asarray(x0))
     sol = solve(c.reduce(system), hset, x0=x0, **kwargs)
     sol.q = c.expand(sol.q)
-    sol.info["constrained_dofs"] = int(c.pivots.size)
     return sol
 
 

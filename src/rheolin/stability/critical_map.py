@@ -35,6 +35,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..errors import ModelError
+from ..mechanics.rotation import transverse_basis
 
 __all__ = ["CriticalSpeedMap", "critical_speed_map", "synchronous_critical_speeds"]
 
@@ -181,10 +182,7 @@ def _whirl_maps(model: Any, built: Any) -> tuple[np.ndarray, np.ndarray]:
         s = built.plan.spin.get(body, 0)
         if s == 0:
             continue
-        e = np.asarray(model.bodies[body].axis, dtype=float)
-        a = np.cross(e, [1.0, 0.0, 0.0] if abs(e[0]) < 0.9 else [0.0, 1.0, 0.0])
-        a /= np.linalg.norm(a)
-        b = np.cross(e, a)
+        a, b = transverse_basis(model.bodies[body].axis)
         for kind in (("ux", "uy", "uz"), ("phix", "phiy", "phiz")):
             found = [index.get((body, node, c)) for c in kind]
             if any(r is None for r in found):

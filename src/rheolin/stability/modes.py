@@ -16,6 +16,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..hill import hill_pencil, state_scaling
+from ..mechanics.rotation import transverse_basis
 from ..system import PeriodicSystem
 
 __all__ = ["AveragedModes", "averaged_modes", "mac", "mode_energy", "mode_kind", "whirl_ratio"]
@@ -188,10 +189,7 @@ def whirl_ratio(
         s = spins.get(body, 0)
         if s == 0:
             continue
-        e = np.asarray(axes[body], dtype=float)
-        a = np.cross(e, [1.0, 0.0, 0.0] if abs(e[0]) < 0.9 else [0.0, 1.0, 0.0])
-        a /= np.linalg.norm(a)
-        b = np.cross(e, a)
+        a, b = transverse_basis(axes[body])
         for kind in (("ux", "uy", "uz"), ("phix", "phiy", "phiz")):
             found = [index.get((body, node, c)) for c in kind]
             if any(r is None for r in found):
