@@ -225,6 +225,29 @@ def test_two_mesh_chain_against_the_monodromy_matrix(ratio: float) -> None:
         assert lat.max_real == pytest.approx(ref, rel=1e-4)
 
 
+def test_default_order_on_random_two_mesh_chains_against_the_monodromy_matrix() -> None:
+    """``floquet(method="lattice")`` starts at order 1 and refines while undecided: on random
+    two-mesh chains (speeds across the combination resonances, both meshes pumped up to 40 %,
+    damping 0.05-1 %) every verdict is decided and equals the monodromy matrix's, with the
+    largest real part within its stated uncertainty."""
+    rng = np.random.default_rng(7)
+    w_gear = _w_gear()
+    unstable = 0
+    for _ in range(12):
+        ratio = rng.uniform(5.0, 12.0)
+        eps1, eps2 = rng.uniform(0.0, 0.4, 2)
+        zeta = 10 ** rng.uniform(-3.3, -2.0)
+        s = chain(2 * w_gear / ratio, eps1, eps2, zeta)
+        ref = monodromy_max_real(s)
+        res = rl.floquet(s, method="lattice")
+        assert res.decided and res.stable == (ref < 0), (ratio, eps1, eps2, zeta)
+        lead = int(np.argmax(res.exponents.real))
+        tol = res.info["uncertainty"][lead] + 1e-6 * abs(ref)
+        assert abs(res.max_real - ref) <= tol, (ratio, res.max_real, ref)
+        unstable += int(ref > 0)
+    assert 3 <= unstable <= 9  # both kinds of verdict are exercised
+
+
 def test_decided_lattice_verdicts_match_the_monodromy_matrix() -> None:
     """Damped Mathieu over a grid crossing the first bands, lattices of order 1..4: a
     decided verdict equals the monodromy matrix's; the coarse ones near the bands say
@@ -271,7 +294,12 @@ def test_memory_budget_refuses_or_coarsens_before_allocating(monkeypatch) -> Non
     small, large = (lattice_memory(s, system_lattice(s, p)) for p in (1, 2))
     assert small < large
     res = rl.floquet(s, method="lattice", memory_budget=(small + large) // 2)
-    assert res.lattice.order == 1 and "lowered" in res.info["note"]
+    # inside a combination resonance order 1 cannot decide; order 2 does not fit: said
+    assert res.lattice.order == 1 and not res.decided
+    assert "order 2 would exceed the memory budget" in res.info["note"]
+    fits = rl.floquet(s, method="lattice", memory_budget=2 * large)
+    assert fits.lattice.order == 2 and fits.decided and not fits.stable
+    assert fits.info["refined_from"] == [1]
     monkeypatch.setenv("RHEOLIN_MEMORY_BUDGET", "1 kB")
     loaded = rl.PeriodicSystem(
         w1, M=s.M, D=s.D, K={k: v for k, v in s.K.items() if k >= 0}, f={5: np.ones(s.n)}
@@ -381,11 +409,14 @@ def test_asymmetric_rotor_on_anisotropic_bearings_inside_its_band(rpm: float) ->
     from rheolin.io import load_model
 
     system = load_model(example_path("rotor")).assemble(rpm * np.pi / 30).system
-    lat = rl.floquet(system, method="lattice")
     ref = _monodromy_max_real_matrix(system)
     assert ref > 1.0  # inside the band (README: about 4105-4340 rpm)
-    assert not lat.stable and lat.decided and lat.complete
-    assert lat.max_real == pytest.approx(ref, rel=1e-6)
+    # at order 1 the growing exponent sits half on the lattice edge: the finer lattice must
+    # search both bending clusters together (once it searched one, and decided stable)
+    for order in (None, 1, 2):
+        lat = rl.floquet(system, method="lattice", order=order)
+        assert not lat.stable and lat.decided and lat.complete
+        assert lat.max_real == pytest.approx(ref, rel=1e-6)
 
 
 def _rotor_variant(kx: float, ky: float, kc: float, c: float, iz: float) -> rl.Model:
@@ -459,7 +490,7 @@ def test_unresolved_exponents_continued_on_the_finer_lattice() -> None:
     (a warm start), and the replaced exponents are those of the dense Hill method on -3..3
     (the same truncation), within their stated uncertainty of the monodromy matrix."""
     system = mathieu(4.2, 3.0, 0.3)
-    res = rl.floquet(system, method="lattice")
+    res = rl.floquet(system, method="lattice", order=2)
     (step,) = res.info["confirmed"]
     assert step["order"] == 3 and step["replaced"] == 1 and step["warm_starts"] == 1
     assert np.all(res.info["order"] == 3)

@@ -37,7 +37,12 @@ def confirm_unresolved(
     # upper half plane, real centres included (their imaginary parts are rounding, of
     # either sign)
     upper = out.centre.imag >= -1e-9 * np.maximum(np.abs(out.centre), system.omega)
-    centres = np.unique(out.centre[todo & upper])
+    # with the clusters they may also stand for (their energy on those modes): two close
+    # clusters share their quota in the search, or the stable exponent nearest both satisfies
+    # the one searched alone and a parametric exponent between them is lost (the example
+    # rotor inside its band at order 1 -> 2 was once decided stable so)
+    linked = [z for i in np.flatnonzero(todo) for z in out.related[i]]
+    centres = np.unique(np.concatenate([out.centre[todo & upper], np.asarray(linked, complex)]))
     centres = centres[np.isfinite(centres)]
     if centres.size == 0:
         out.info["confirmed"] = {"order": finer.order, "clusters": 0, "replaced": 0, "confirmed": 0}
