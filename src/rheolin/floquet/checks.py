@@ -84,6 +84,21 @@ def _gershgorin(system: PeriodicSystem, avg: _Averaged, modes: list[int]) -> lis
     the balanced first-order coupling in modal coordinates, ``M_k`` at the row's local
     frequency ``lambda_j - i k w1``). Every Hill exponent lies in the union of the discs of
     radius ``R_j`` about the copies ``lambda_j - i h w1``, for any truncation."""
+    # a mode's radius does not depend on the lattice: kept on ``avg`` (a finer lattice's
+    # confirmation asks again for the modes of the clusters it settles)
+    known: dict[int, float] = getattr(avg, "_gershgorin_radii", None) or {}
+    if getattr(avg, "_gershgorin_system", None) is not system:
+        known = {}
+    missing = sorted({int(m) for m in modes if int(m) not in known})
+    if missing:
+        known.update(zip(missing, _radii(system, avg, missing), strict=True))
+    avg._gershgorin_radii = known  # type: ignore[attr-defined]
+    avg._gershgorin_system = system  # type: ignore[attr-defined]
+    return [known[int(m)] for m in modes]
+
+
+def _radii(system: PeriodicSystem, avg: _Averaged, modes: list[int]) -> list[float]:
+    """The radii of :func:`_gershgorin`, computed."""
     n, w = system.n, system.omega
     Wr = avg.W[:, modes].conj().T  # rows of the modal transform
     out = np.zeros(len(modes))
