@@ -21,7 +21,9 @@ What it measures (2 cores unless the machine has more):
 
 Usage::
 
-    python bench/sweep.py [--points 16] [--out bench/results/sweep.md]
+    python bench/sweep.py [--points 16] [--full] [--out bench/results/sweep.md]
+
+``--full`` also runs the whole 1000-speed run-up on 2 workers (section 2b, minutes).
 """
 
 from __future__ import annotations
@@ -43,6 +45,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--points", type=int, default=16, help="speeds of the measured subset")
     ap.add_argument("--out", type=Path, default=None, help="write the results (markdown)")
+    ap.add_argument(
+        "--full", action="store_true", help="also run the whole 1000-speed run-up (2 workers)"
+    )
     args = ap.parse_args()
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     os.environ.setdefault("OMP_NUM_THREADS", "1")
@@ -107,6 +112,23 @@ def main() -> None:
         f"({full.size} x {rate:.2f} s per point + start + maps phase of the subset)"
     )
     say()
+    if args.full:
+        whole = _whole(StudySpec.create(example_path("gearbox"), full))
+        say("## 2b. The whole run-up: 1000 speeds, 500..6000 rpm, 2 workers")
+        say()
+        say("| | value |")
+        say("|---|---|")
+        say(f"| wall, cluster start to results on disk | **{whole['wall']:.0f} s** |")
+        say(
+            f"| points phase | {whole['points']:.0f} s ({whole['per_point']:.2f} s per point "
+            "per worker) |"
+        )
+        say(f"| maps phase (refining unstable ranges) | {whole['maps']:.1f} s |")
+        say(f"| continuation blocks | {whole['block']} speeds |")
+        say(f"| verdicts | {whole['decided']} of 1000 decided, {whole['stable']} stable |")
+        say(f"| unstable ranges | {whole['ranges'] or 'none'} |")
+        say(f"| peak RSS per worker | {whole['rss']} MB |")
+        say()
     res = _resume(spec, two["points"])
     say("## 3. Resume")
     say()
@@ -229,6 +251,46 @@ def _run_up(spec) -> list[dict]:
 
 
 _KEEP: dict[str, Path] = {}
+
+
+def _whole(spec) -> dict:
+    """The full run-up on a fresh 2-worker cluster, written to a temporary directory."""
+    from rheolin.study import run_study
+    from rheolin.study.executor import local_cluster
+
+    folder = Path(tempfile.mkdtemp(prefix="bench-sweep-full-"))
+    marks: dict[str, float] = {}
+
+    def progress(event):
+        marks.setdefault(event.phase, time.perf_counter())
+
+    t0 = time.perf_counter()
+    with local_cluster(2) as client:
+        res = run_study(spec, out=folder, client=client, progress=progress)
+        rss = sorted(v / 1024 for v in client.run(_maxrss).values())
+    wall = time.perf_counter() - t0
+    end = marks.get("maps", t0 + wall)
+    points = end - marks["points"]
+    ds = res.dataset
+    smap = res.maps.get(0)
+    ranges = [
+        f"{r.lower / RPM:.1f}..{r.upper / RPM:.1f} rpm ({r.label or r.mechanism})"
+        for r in (smap.ranges if smap is not None else [])
+    ]
+    decided = int(np.sum(np.asarray(smap.decided, bool))) if smap is not None else 0
+    stable = int(np.sum(np.asarray(smap.stable, bool))) if smap is not None else 0
+    shutil.rmtree(folder, ignore_errors=True)
+    return dict(
+        wall=wall,
+        points=points,
+        per_point=2 * points / ds["success"].size,
+        maps=(t0 + wall - marks["maps"]) if "maps" in marks else 0.0,
+        block=spec.block,
+        decided=decided,
+        stable=stable,
+        ranges="; ".join(ranges),
+        rss=", ".join(f"{m:.0f}" for m in rss),
+    )
 
 
 def _maxrss() -> int:

@@ -368,7 +368,9 @@ def sweep(
     scheduler: str = typer.Option(
         None, help="Run on an existing Dask cluster: its scheduler address (tcp://host:8786)."
     ),
-    chunk_size: int = typer.Option(None, help="Points per task (default: adaptive)."),
+    chunk_size: int = typer.Option(
+        None, help="Points per task, rounded up to whole continuation blocks (default: adaptive)."
+    ),
     overwrite: bool = typer.Option(
         False, help="Replace another study's checkpoint and results in the output directory."
     ),

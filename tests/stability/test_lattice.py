@@ -248,6 +248,30 @@ def test_default_order_on_random_two_mesh_chains_against_the_monodromy_matrix() 
     assert 3 <= unstable <= 9  # both kinds of verdict are exercised
 
 
+def test_continued_sweep_through_a_combination_resonance_against_the_monodromy_matrix() -> None:
+    """A speed sweep with one :class:`~rheolin.floquet.Continuation` (each search starting
+    from the previous speed's eigenvectors) into, through and out of the chain's combination
+    resonance: every verdict is decided and equals the monodromy matrix's, the largest real
+    part within its stated uncertainty, and the searches did start warm."""
+    from rheolin.floquet import Continuation
+
+    w_gear = _w_gear()
+    cont = Continuation()
+    verdicts, warm = [], 0
+    for ratio in np.linspace(7.9, 8.2, 13):
+        s = chain(2 * w_gear / ratio, 0.3, 0.3)
+        ref = monodromy_max_real(s)
+        res = rl.floquet(s, method="lattice", continuation=cont)
+        assert res.decided and res.stable == (ref < 0), ratio
+        lead = int(np.argmax(res.exponents.real))
+        tol = res.info["uncertainty"][lead] + 1e-6 * abs(ref)
+        assert abs(res.max_real - ref) <= tol, (ratio, res.max_real, ref)
+        verdicts.append(res.stable)
+        warm += int(res.info.get("warm_starts", 0) > 0)
+    assert not all(verdicts) and any(verdicts)  # the sweep enters the band and leaves it
+    assert warm >= 6
+
+
 def test_decided_lattice_verdicts_match_the_monodromy_matrix() -> None:
     """Damped Mathieu over a grid crossing the first bands, lattices of order 1..4: a
     decided verdict equals the monodromy matrix's; the coarse ones near the bands say

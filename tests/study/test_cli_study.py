@@ -45,6 +45,8 @@ def uninterrupted(band, tmp_path_factory):
 
 def _check_readable(out: Path) -> set[int]:
     """Open every file a killed run left; return the points in the chunk files."""
+    if not out.exists():  # killed before it made the directory
+        return set()
     names = {p.name for p in out.iterdir()}
     assert names <= {".rheolin.lock", "checkpoint"} | {n for n in names if n.endswith(".tmp")}
     points: list[int] = []
@@ -79,7 +81,9 @@ def test_sigkill_at_random_moments_then_resume(band, uninterrupted, tmp_path):
         )
         # wait for a random number of new chunk files (or a random early moment), then a
         # random fraction of a chunk more: kills land in start-up, solves and writes
-        wanted = int(rng.integers(0, 6))
+        # (17 chunks in all: the continuation blocks hold 6 speeds; at most 2 per round
+        # leave work for every round)
+        wanted = int(rng.integers(0, 3))
         start = len(list((out / "checkpoint").glob("chunk-*.nc"))) if out.exists() else 0
         deadline = time.monotonic() + 120
         while proc.poll() is None and time.monotonic() < deadline:

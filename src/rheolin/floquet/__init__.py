@@ -36,6 +36,7 @@ from .api import (
 )
 from .averaged import MAX_AVERAGED_DENSE, lattice_memory
 from .checks import liouville_sum
+from .continuation import Continuation
 from .outcome import LatticeExponents
 from .result import SAFETY, SPLIT_FACTOR, TRUNCATION_SAFETY, FloquetResult
 from .search import lattice_exponents
@@ -48,6 +49,7 @@ __all__ = [
     "SAFETY",
     "SPLIT_FACTOR",
     "TRUNCATION_SAFETY",
+    "Continuation",
     "FloquetResult",
     "LatticeExponents",
     "dense_stability_harmonics",

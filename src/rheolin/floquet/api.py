@@ -19,6 +19,7 @@ from ..rigid_modes import find_rigid_modes
 from ..system import PeriodicSystem
 from .averaged import lattice_memory
 from .confirm import confirm_unresolved
+from .continuation import Continuation
 from .dense import _floquet_dense
 from .result import FloquetResult, _result
 from .search import lattice_exponents
@@ -69,6 +70,7 @@ def floquet(
     max_shifts: int = 200,
     memory_budget: str | int | float | None = None,
     near: Any = None,
+    continuation: Continuation | None = None,
 ) -> FloquetResult:
     """Floquet exponents by Hill's method.
 
@@ -118,6 +120,10 @@ def floquet(
         estimated memory exceeds it (bytes or ``"4 GB"``; default
         :func:`rheolin.budget.memory_budget`). The automatic choice does not raise the
         lattice order past it, and says so in ``info["note"]`` (the verdict stays undecided).
+    continuation
+        Lattice method over a sweep: a :class:`~rheolin.floquet.Continuation` shared by the
+        calls at successive speeds; each lattice search starts from the previous call's
+        eigenvectors (fewer Arnoldi steps; the same checks and verdict).
 
     Examples
     --------
@@ -142,7 +148,10 @@ def floquet(
         system = system.constraint.reduce(system)
     rigid = find_rigid_modes(system)
     held = system if rigid is None else rigid.reduce(system)
-    res = _floquet(held, harmonics, method, order, frequencies, k, max_shifts, memory_budget, near)
+    res = _floquet(
+        held, harmonics, method, order, frequencies, k, max_shifts, memory_budget, near,
+        continuation=continuation,
+    )  # fmt: skip
     if rigid is not None:  # their zero exponents are a Jordan block: held, not analysed
         note = rigid.note(system)
         res.info["note"] = f"{note}; {res.info['note']}" if res.info.get("note") else note
@@ -160,6 +169,8 @@ def _floquet(
     max_shifts: int,
     memory_budget: str | int | float | None,
     near: Any,
+    *,
+    continuation: Continuation | None = None,
 ) -> FloquetResult:
     """:func:`floquet` on a system without rigid-body modes (checked by the caller)."""
     budget = memory_budget
@@ -168,7 +179,9 @@ def _floquet(
             raise ValueError(
                 f"a Lattice truncation needs method='lattice' (or 'auto'), got {method!r}"
             )
-        return _floquet_lattice(system, harmonics, budget=budget, near=near)
+        return _floquet_lattice(
+            system, harmonics, budget=budget, near=near, continuation=continuation
+        )
     if near is not None and method != "lattice":
         raise ValueError("`near` needs method='lattice'")
     if method == "lattice":
@@ -178,7 +191,12 @@ def _floquet(
                 "or a rheolin.lattice.Lattice as `harmonics`"
             )
         return _lattice_auto(
-            system, order, budget, refine=order is None and near is None, near=near
+            system,
+            order,
+            budget,
+            refine=order is None and near is None,
+            near=near,
+            continuation=continuation,
         )
     if harmonics is None:
         if system.time_invariant:
@@ -188,7 +206,9 @@ def _floquet(
                 method == "auto"
                 and 2 * system.n * (2 * _dense_order(system) + 1) > AUTO_DENSE_LIMIT
             ):
-                return _lattice_auto(system, order, budget, refine=order is None)
+                return _lattice_auto(
+                    system, order, budget, refine=order is None, continuation=continuation
+                )
             hset = dense_stability_harmonics(system)
     else:
         hset = as_harmonic_set(harmonics)
@@ -284,7 +304,13 @@ def floquet_memory(system: PeriodicSystem, order: int | None = None) -> tuple[st
 
 
 def _lattice_auto(
-    system: PeriodicSystem, order: int | None, budget: Any, *, refine: bool, near: Any = None
+    system: PeriodicSystem,
+    order: int | None,
+    budget: Any,
+    *,
+    refine: bool,
+    near: Any = None,
+    continuation: Continuation | None = None,
 ) -> FloquetResult:
     """Lattice method at ``order`` (default: the coarsest, raised one order at a time up to
     :data:`MAX_AUTO_ORDER` while undecided and the larger lattice fits the budget; where it
@@ -292,7 +318,7 @@ def _lattice_auto(
     limit = resolve_budget(budget)
     p = DEFAULT_LATTICE_ORDER if order is None else int(order)
     lat = system_lattice(system, p, max_size=10**6)
-    res = _floquet_lattice(system, lat, budget=budget, near=near)
+    res = _floquet_lattice(system, lat, budget=budget, near=near, continuation=continuation)
     tried: list[int] = []
     seconds = float(res.info["seconds"])
     while refine and not res.decided and p < max(MAX_AUTO_ORDER, DEFAULT_LATTICE_ORDER):
@@ -304,7 +330,7 @@ def _lattice_auto(
         log.info("floquet: order %d undecided; refining to order %d", p, p + 1)
         tried.append(p)
         p += 1
-        res = _floquet_lattice(system, finer, budget=budget)
+        res = _floquet_lattice(system, finer, budget=budget, continuation=continuation)
         seconds += float(res.info["seconds"])
         res.info["refined_from"] = list(tried)
         res.info["seconds"] = seconds
@@ -312,7 +338,12 @@ def _lattice_auto(
 
 
 def _floquet_lattice(
-    system: PeriodicSystem, lattice: Lattice, *, budget: Any, near: Any = None
+    system: PeriodicSystem,
+    lattice: Lattice,
+    *,
+    budget: Any,
+    near: Any = None,
+    continuation: Continuation | None = None,
 ) -> FloquetResult:
     t0 = time.perf_counter()
     est = lattice_memory(system, lattice)
@@ -324,7 +355,10 @@ def _floquet_lattice(
         "lower the lattice order",
     )
     with np.errstate(under="ignore"), _single_thread_blas():
-        out = lattice_exponents(system, lattice, near=near)
+        start = continuation.start(system.n, lattice) if continuation is not None else None
+        out = lattice_exponents(system, lattice, near=near, start=start, same_system=False)
+        if continuation is not None and near is None:
+            continuation.keep(system.n, lattice, out)
         # unresolved exponents: search their clusters again on finer lattices (p + 1, p + 2),
         # only near them, as long as the memory budget allows
         finer: Lattice | None = lattice

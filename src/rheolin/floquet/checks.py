@@ -107,26 +107,56 @@ def _radii(system: PeriodicSystem, avg: _Averaged, modes: list[int]) -> list[flo
         Tq, Tv = sp.diags_array(1.0 / avg.sq), sp.diags_array(1.0 / avg.sv)
         terms = []
         for k in system.coefficient_harmonics:
-            terms.append((
-                k,
-                sp.csc_array(Tv @ sp.csr_array(system.K[k]) @ Tq) if k in system.K else None,
-                sp.csc_array(Tv @ sp.csr_array(system.D[k]) @ Tv) if k in system.D else None,
-                sp.csc_array(Tv @ sp.csr_array(system.M[k]) @ Tv) if k in system.M else None,
-            ))  # fmt: skip
+            mats = [
+                sp.csr_array(Tv @ sp.csr_array(system.K[k]) @ Tq) if k in system.K else None,
+                sp.csr_array(Tv @ sp.csr_array(system.D[k]) @ Tv) if k in system.D else None,
+                sp.csr_array(Tv @ sp.csr_array(system.M[k]) @ Tv) if k in system.M else None,
+            ]
+            terms.append((k, *_compact(mats)))
         cached = (system, terms)
         avg._gershgorin_terms = cached  # type: ignore[attr-defined]
-    for k, Kk, Dk, Mk in cached[1]:
-        low = Wr[:, n:]  # the couplings act on the v rows
-        part = np.zeros((len(modes), 2 * n), dtype=complex)
-        if Kk is not None:
-            part[:, :n] += np.asarray((Kk.T @ low.T).T)
-        if Dk is not None:
-            part[:, n:] += np.asarray((Dk.T @ low.T).T)
-        if Mk is not None:
-            s = avg.lam[modes] - 1j * k * w
-            part[:, n:] += s[:, None] * np.asarray((Mk.T @ low.T).T)
-        out += np.abs(part @ avg.X).sum(axis=1)
+    low = Wr[:, n:]  # the couplings act on the v rows
+    for k, rows, cq, cv, Kc, Dc, Mc in cached[1]:
+        if rows.size == 0:
+            continue
+        lr = low[:, rows]
+        # the couplings touch a few DOFs (a gear mesh's): only those rows of the modal
+        # transform enter, the rest of ``w_j^H E_k`` is zero (4x faster on the gearbox)
+        total = np.zeros((len(modes), avg.X.shape[1]), dtype=complex)
+        if Kc is not None:
+            total += (lr @ Kc) @ avg.X[cq]
+        if Dc is not None or Mc is not None:
+            pv = lr @ Dc if Dc is not None else 0.0
+            if Mc is not None:
+                s = avg.lam[modes] - 1j * k * w
+                pv = pv + s[:, None] * (lr @ Mc)
+            total += pv @ avg.X[n + cv]
+        out += np.abs(total).sum(axis=1)
     return out.tolist()
+
+
+def _compact(mats: list[Any]) -> tuple[Any, ...]:
+    """``(rows, q columns, v columns, K, D, M)``: the coupling matrices (balanced, CSR, None
+    where absent) as dense blocks on their nonzero rows and columns (K on the q columns, D
+    and M on the v columns)."""
+
+    def nz_rows(a: Any) -> np.ndarray:
+        return np.flatnonzero(np.diff(a.indptr)) if a is not None else np.zeros(0, int)
+
+    def nz_cols(a: Any) -> np.ndarray:
+        return np.unique(a.indices[a.data != 0]) if a is not None else np.zeros(0, int)
+
+    K, D, M = mats
+    rows = np.unique(np.concatenate([nz_rows(a) for a in mats]))
+    cq = nz_cols(K)
+    cv = np.unique(np.concatenate([nz_cols(D), nz_cols(M)]))
+
+    def block(a: Any, cols: np.ndarray) -> np.ndarray | None:
+        if a is None:
+            return None
+        return np.asarray(a[rows][:, cols].toarray(), dtype=complex)
+
+    return rows, cq, cv, block(K, cq), block(D, cv), block(M, cv)
 
 
 def _split_gaps(lam: np.ndarray, H: np.ndarray, w: float) -> np.ndarray:

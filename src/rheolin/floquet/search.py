@@ -73,6 +73,7 @@ def lattice_exponents(
     *,
     near: np.ndarray | None = None,
     start: LatticeExponents | None = None,
+    same_system: bool = True,
 ) -> LatticeExponents:
     """Representatives of the Floquet exponents of ``system`` on ``lattice``.
 
@@ -80,7 +81,10 @@ def lattice_exponents(
     time-averaged modes nearest these values (for tracking one exponent across speeds); the
     result is then partial (``expected`` is the number of those modes). ``start``: the
     representatives of a coarser lattice of the same system; each cluster's search starts from
-    its eigenvectors there (a few Arnoldi steps instead of a full run).
+    its eigenvectors there (a few Arnoldi steps instead of a full run). ``same_system=False``:
+    ``start`` is of a nearby system (the previous speed of a sweep, on a lattice with the same
+    or fewer harmonics): only its eigenvectors are used, for the clusters whose time-averaged
+    exponents have not moved by more than ``CLUSTER_TOL`` (the others start cold).
     """
     t0 = time.perf_counter()
     n, w = system.n, system.omega
@@ -88,7 +92,10 @@ def lattice_exponents(
     nh = H.size
     if 0 not in set(H.tolist()):
         raise ValueError("the lattice must contain harmonic 0")
-    avg = start.modes if start is not None and start.modes is not None else _Averaged(system)
+    same = same_system and start is not None
+    avg = (
+        start.modes if same and start is not None and start.modes is not None else _Averaged(system)
+    )
     hill = LatticeHill(system, H)
     sq_rep, sv_rep = np.tile(avg.sq, nh), np.tile(avg.sv, nh)
     Mconv = hill.inner.Mconv()
@@ -402,7 +409,7 @@ def lattice_exponents(
             [c.forced or c.edge > UNRESOLVED_EDGE for c, cj in reps for _ in range(2 if cj else 1)],
             dtype=bool,
         ),
-        liouville=start.liouville if start is not None else liouville_sum(system),
+        liouville=start.liouville if same and start is not None else liouville_sum(system),
         info=info,
         vectors=vectors,
         indices=H,

@@ -80,12 +80,14 @@ def solve_point(
     template: SpeedTemplate | None = None,
     x0: Any = None,
     backend: str = "auto",
+    continuation: Any = None,
 ) -> OperatingPoint:
     """Assemble ``model`` at input ``speed`` [rad/s] and solve for the periodic steady state.
 
     ``template`` (``model.speed_template()``) skips re-reading the model at every speed of a
     sweep; ``x0`` (e.g. the solution at the previous speed) starts the iterative solver;
-    ``backend`` is passed to :func:`rheolin.solve`.
+    ``backend`` and ``continuation`` (a :class:`~rheolin.floquet.Continuation` over the
+    speeds of a sweep) are passed to :func:`rheolin.solve`.
 
     ``stability=None`` checks Floquet stability whenever it fits the memory budget (as
     :func:`rheolin.solve`).
@@ -108,6 +110,7 @@ def solve_point(
         stability=stability,
         x0=x0,
         backend=backend,
+        continuation=continuation,
     )
     dominant = sol.info.get("rigid_dominant_dofs")
     if dominant:  # name the free motions by their body and component: "rotor uz, rotor phiz"

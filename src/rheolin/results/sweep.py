@@ -50,7 +50,8 @@ def sweep_speeds(
 
     The model is assembled once (:class:`~rheolin.mechanics.template.SpeedTemplate`), and each
     speed starts from the converged solution of the previous one when both share the harmonic
-    set (a warm start: fewer iterations, same tolerance).
+    set (a warm start: fewer iterations, same tolerance), and its Floquet searches from the
+    previous speed's eigenvectors (:class:`~rheolin.floquet.Continuation`).
 
     >>> from rheolin.io import load_model
     >>> from rheolin.data import example_path
@@ -58,9 +59,12 @@ def sweep_speeds(
     >>> ds["response"].dims, ds["success"].values.tolist()
     (('speed', 'harmonic', 'node'), [1, 1])
     """
+    from ..floquet import Continuation
+
     points = []
     template = model.speed_template()
     previous = None
+    options.setdefault("continuation", Continuation())
     for i, w in enumerate(speeds):
         p = solve_point(model, float(w), template=template, x0=previous, **options)
         points.append(_reduce(p))

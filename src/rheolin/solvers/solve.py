@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..budget import format_bytes, memory_budget
-from ..floquet import dense_stability_harmonics, floquet, floquet_memory
+from ..floquet import Continuation, dense_stability_harmonics, floquet, floquet_memory
 from ..harmonics import HarmonicSet, as_harmonic_set
 from ..operator import HarmonicBalance, SingularBlockError
 from ..rigid_modes import RigidModes, find_rigid_modes
@@ -45,6 +45,7 @@ def solve(
     backend: str = "auto",
     sparse_backend: str = "auto",
     memory_budget: str | int | None = None,
+    continuation: Continuation | None = None,
 ) -> Solution:
     """Periodic steady state of ``M(t) q'' + D(t) q' + K(t) q = f(t)`` by harmonic balance.
 
@@ -81,6 +82,10 @@ def solve(
         budget); ``False`` never. An unstable operating point gives ``success=False``,
         ``status=4``: its periodic solution exists but is not physical (docs/stability.md). The
         Floquet result is kept in ``Solution.floquet``.
+    continuation
+        Over a sweep, the :class:`~rheolin.floquet.Continuation` shared by the solves at
+        successive speeds: each stability check's lattice searches start from the previous
+        one's eigenvectors.
     options
         Method-specific options (e.g. for ``"transient"``), passed through unchanged.
     x0
@@ -132,7 +137,7 @@ def solve(
     again = dict(
         method=method, rtol=rtol, maxiter=maxiter, callback=callback, workers=workers,
         stability=stability, options=options, backend=backend, sparse_backend=sparse_backend,
-        memory_budget=memory_budget,
+        memory_budget=memory_budget, continuation=continuation,
     )  # fmt: skip
     if system.constraint is not None:  # rigid links: eliminated, the answer on every DOF
         return _linked(system, hset, x0, again)
@@ -168,7 +173,7 @@ def solve(
         rigid = rigid_modes()
         if rigid is not None:
             return _constrained(system, rigid, hset, x0, again)
-    return _check_stability(system, sol, stability)
+    return _check_stability(system, sol, stability, continuation)
 
 
 def _constrained(
@@ -246,7 +251,12 @@ def stability_harmonics(system: PeriodicSystem) -> HarmonicSet:
     return dense_stability_harmonics(system)
 
 
-def _check_stability(system: PeriodicSystem, sol: Solution, stability: bool | None) -> Solution:
+def _check_stability(
+    system: PeriodicSystem,
+    sol: Solution,
+    stability: bool | None,
+    continuation: Continuation | None = None,
+) -> Solution:
     if stability is False:
         return sol
     if stability is None:
@@ -259,7 +269,7 @@ def _check_stability(system: PeriodicSystem, sol: Solution, stability: bool | No
                 f"{format_bytes(limit)} (raise RHEOLIN_MEMORY_BUDGET, or reduce the model)"
             )
             return sol
-    res = floquet(system)
+    res = floquet(system, continuation=continuation)
     sol.floquet = res
     sol.stable, sol.max_floquet_real = res.stable, res.max_real
     if not res.decided:

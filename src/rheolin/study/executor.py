@@ -40,11 +40,14 @@ MAX_CHUNK = 256
 
 
 class Planner:
-    """Chunks of the pending points; a chunk never mixes parameter combinations.
+    """Chunks of the pending points; a chunk never mixes parameter combinations, and never
+    splits a continuation block (``block_of``: the points solved as one sequence).
 
     >>> p = Planner([0, 1, 2, 3, 7, 8], combo_of=lambda i: i // 5, slots=1)
     >>> p.next(), p.observe(1, 0.5), p.next(), p.next()
     ([0], None, [1, 2, 3], [7, 8])
+    >>> Planner(range(6), combo_of=lambda i: 0, chunk_size=1, block_of=lambda i: i // 4).next()
+    [0, 1, 2, 3]
     """
 
     def __init__(
@@ -54,9 +57,11 @@ class Planner:
         *,
         slots: int = 1,
         chunk_size: int | None = None,
+        block_of: Callable[[int], Any] | None = None,
     ) -> None:
         self.pending = deque(sorted(points))
         self.combo_of = combo_of
+        self.block_of = block_of
         self.fixed = chunk_size
         self.seconds_per_point: float | None = None
         self.slots = max(1, slots)
@@ -78,7 +83,12 @@ class Planner:
             return []
         combo = self.combo_of(self.pending[0])
         out = [self.pending.popleft()]
-        while self.pending and len(out) < size and self.combo_of(self.pending[0]) == combo:
+        while self.pending and self.combo_of(self.pending[0]) == combo:
+            whole = self.block_of is not None and (
+                self.block_of(self.pending[0]) == self.block_of(out[-1])
+            )
+            if len(out) >= size and not whole:
+                break
             out.append(self.pending.popleft())
         return out
 

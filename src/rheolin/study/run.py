@@ -147,7 +147,8 @@ def run_study(
         that many processes for this study (at most one per missing point), None as many as
         there are cores.
     chunk_size
-        Points per task (default: adaptive, see :class:`~rheolin.study.executor.Planner`).
+        Points per task, rounded up to whole continuation blocks (default: adaptive, see
+        :class:`~rheolin.study.executor.Planner`).
     progress
         Called with a :class:`StudyProgress` after every finished task.
     refine
@@ -249,7 +250,9 @@ def _points(
     budget: int,
     chunk_size: int | None,
 ) -> None:
-    planner = Planner(pending, spec.combo_of, slots=ex.slots, chunk_size=chunk_size)
+    planner = Planner(
+        pending, spec.combo_of, slots=ex.slots, chunk_size=chunk_size, block_of=spec.block_of
+    )
     state.report()
     running: dict[Any, list[int]] = {}
     while planner or running:

@@ -36,8 +36,11 @@ from .params import Parameter, ParameterError, apply, parameter, parse_vary
 
 __all__ = ["FORMAT", "Settings", "StudySpec"]
 
-#: Version of the checkpoint layout and of the identity below.
-FORMAT = 1
+#: Version of the checkpoint layout and of the identity below (2: continuation blocks).
+FORMAT = 2
+
+#: Most consecutive speeds solved as one sequence (:attr:`StudySpec.block`).
+CONTINUATION_BLOCK = 8
 
 
 @dataclass(frozen=True)
@@ -64,6 +67,11 @@ class StudySpec:
 
     Points are numbered combination-major: point ``i`` is speed ``i % n_speeds`` of parameter
     combination ``i // n_speeds`` (combinations in C order over :attr:`parameters`).
+
+    Consecutive speeds of a combination form blocks of :attr:`block` points, solved in order
+    by one task: each point after the first starts from its predecessor's solution and
+    Floquet eigenvectors (continuation). The blocks depend on the speeds only, so every
+    point's result is the same whatever the workers, the chunks and the interruptions.
     """
 
     document: dict[str, Any]
@@ -173,6 +181,23 @@ class StudySpec:
     def speed_of(self, point: int) -> int:
         """The speed index of a point."""
         return point % self.speeds.size
+
+    @property
+    def block(self) -> int:
+        """Speeds per continuation block: up to :data:`CONTINUATION_BLOCK`, fewer for short
+        sweeps (at least 16 blocks per combination, so that they spread over the workers).
+
+        >>> import numpy as np
+        >>> from rheolin.data import example_path
+        >>> [StudySpec.create(example_path("rotor"), np.arange(1.0, n + 1)).block
+        ...  for n in (7, 40, 1000)]
+        [1, 2, 8]
+        """
+        return max(1, min(CONTINUATION_BLOCK, self.speeds.size // 16))
+
+    def block_of(self, point: int) -> tuple[int, int]:
+        """``(combination, block)`` of a point."""
+        return self.combo_of(point), self.speed_of(point) // self.block
 
     def assignments(self, combo: int) -> list[tuple[Parameter, int]]:
         """``(parameter, value index)`` of a combination."""

@@ -1,0 +1,61 @@
+"""Continuation of the lattice search over a sweep: each call starts from the last one.
+
+Over a fine speed grid the Floquet exponents and their eigenvectors move little from one speed
+to the next. A :class:`Continuation` passed to :func:`rheolin.floquet` keeps the lattice
+eigenvectors of each call (one set per lattice order); the next call's searches start from
+them, as a finer lattice's searches start from a coarser one's (docs/stability.md). Only the
+starting vectors change: every cluster is still searched until its own test is met, so the
+verdict and its checks are those of a call without one. A cluster whose time-averaged
+exponents moved by more than ``CLUSTER_TOL`` starts cold, and so does every search after a
+change of model size.
+
+>>> import numpy as np, rheolin as rl
+>>> from rheolin.floquet import Continuation
+>>> cont = Continuation()
+>>> def mathieu(w):  # a pumped oscillator: time variation at 2 w
+...     return rl.PeriodicSystem(2 * w, M={0: np.eye(1)}, D={0: 0.1 * np.eye(1)},
+...                              K={0: np.eye(1), 1: -0.1 * np.eye(1)})
+>>> a = rl.floquet(mathieu(1.3), method="lattice", order=4, continuation=cont)
+>>> b = rl.floquet(mathieu(1.31), method="lattice", order=4, continuation=cont)
+>>> c = rl.floquet(mathieu(1.31), method="lattice", order=4)
+>>> b.info["warm_starts"] > 0, bool(abs(b.max_real - c.max_real) < 1e-9)
+(True, True)
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+from ..lattice import Lattice
+from .outcome import LatticeExponents
+
+__all__ = ["Continuation"]
+
+
+class Continuation:
+    """The lattice eigenvectors of the last :func:`~rheolin.floquet` call, per lattice.
+
+    Holds one :class:`~rheolin.floquet.LatticeExponents` per lattice order seen (their
+    eigenvectors: a few MB for a gearbox); :meth:`clear` forgets them.
+    """
+
+    def __init__(self) -> None:
+        self._kept: dict[tuple[int, int], tuple[np.ndarray, LatticeExponents]] = {}
+
+    def start(self, n: int, lattice: Lattice) -> LatticeExponents | None:
+        """The kept search on ``lattice`` for a system of ``n`` DOFs (None: none)."""
+        got = self._kept.get((n, lattice.order))
+        if got is None or not np.array_equal(got[0], lattice.indices):
+            return None
+        return got[1]
+
+    def keep(self, n: int, lattice: Lattice, out: LatticeExponents) -> None:
+        """Keep a search's result as it is now (a later confirmation on a finer lattice
+        replaces some of its fields: the copy keeps these)."""
+        self._kept[(n, lattice.order)] = (lattice.indices.copy(), copy.copy(out))
+
+    def clear(self) -> None:
+        """Forget every kept search (the next call starts cold)."""
+        self._kept.clear()
