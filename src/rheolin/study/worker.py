@@ -103,20 +103,26 @@ def compute_chunk(task: ChunkTask) -> ChunkResult:
 
 
 class _Chain:
-    """The continuation within a block: a point starts from its predecessor's solution and
-    Floquet eigenvectors when that point is the previous speed of the same block and was
-    solved just before, in this task (so always, unless it failed)."""
+    """The continuation within a block: a point starts from its predecessors' solutions and
+    Floquet eigenvectors when they are the previous speeds of the same block, solved just
+    before in this task (so always, unless one failed). With two predecessors the start is
+    their linear extrapolation to the new speed (gmres on the gearbox: 10 iterations instead
+    of 14 from the previous solution, 23 cold)."""
 
     def __init__(self, spec: StudySpec) -> None:
         from ..floquet import Continuation
 
         self.spec = spec
         self.last: int | None = None
-        self.solution: Any = None
+        self.history: list[tuple[float, Any]] = []  # (speed, solution), the last two
         self.continuation = Continuation()
 
     def start(self, point: int) -> tuple[Any, Any]:
         """``(x0, continuation)`` for ``point``."""
+        import dataclasses
+
+        import numpy as np
+
         spec = self.spec
         linked = (
             self.last is not None
@@ -124,16 +130,29 @@ class _Chain:
             and spec.block_of(point) == spec.block_of(self.last)
         )
         if not linked:
-            self.solution = None
+            self.history.clear()
             self.continuation.clear()
         self.last = None  # until this point is done
-        return self.solution, self.continuation
+        if not self.history:
+            return None, self.continuation
+        w = float(spec.speeds[spec.speed_of(point)])
+        w1, s1 = self.history[-1]
+        if len(self.history) == 2:
+            w0, s0 = self.history[0]
+            if np.array_equal(s0.harmonics, s1.harmonics) and w1 != w0:
+                q = s1.q + (s1.q - s0.q) * ((w - w1) / (w1 - w0))
+                return dataclasses.replace(s1, q=q), self.continuation
+        return s1, self.continuation
 
     def done(self, point: int, solution: Any) -> None:
         import numpy as np
 
         self.last = point
-        self.solution = solution if np.all(np.isfinite(solution.q)) else None
+        if not np.all(np.isfinite(solution.q)):
+            self.history.clear()
+            return
+        w = float(self.spec.speeds[self.spec.speed_of(point)])
+        self.history = [*self.history[-1:], (w, solution)]
 
 
 def _solve(
