@@ -228,7 +228,7 @@ def stability_map(
             return as_harmonic_set(harmonics(system))
         return as_harmonic_set(harmonics)
 
-    def evaluate(W: float, near: Any = None) -> tuple[Any, FloquetResult]:
+    def evaluate(W: float, near: Any = None, continuation: Any = None) -> tuple[Any, FloquetResult]:
         a = model.assemble(float(W))
         if near is not None:
             res = floquet(
@@ -241,12 +241,16 @@ def stability_map(
                 method=method,
                 order=order,
                 memory_budget=memory_budget,
+                continuation=continuation,
             )
         return a, res
 
+    from ..floquet import Continuation
+
+    cont = Continuation()  # each speed's lattice searches start from the previous speed's
     results: list[FloquetResult] = []
     for i, W in enumerate(speeds):
-        results.append(evaluate(W)[1])
+        results.append(evaluate(W, continuation=cont)[1])
         if progress is not None:
             progress(i, results[-1])
     smap = map_from_results(
