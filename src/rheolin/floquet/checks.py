@@ -84,39 +84,43 @@ def _gershgorin(system: PeriodicSystem, avg: _Averaged, modes: list[int]) -> lis
     the balanced first-order coupling in modal coordinates, ``M_k`` at the row's local
     frequency ``lambda_j - i k w1``). Every Hill exponent lies in the union of the discs of
     radius ``R_j`` about the copies ``lambda_j - i h w1``, for any truncation."""
-    # a mode's radius does not depend on the lattice: kept on ``avg`` (a finer lattice's
-    # confirmation asks again for the modes of the clusters it settles)
-    known: dict[int, float] = getattr(avg, "_gershgorin_radii", None) or {}
-    if getattr(avg, "_gershgorin_system", None) is not system:
-        known = {}
+    # kept on ``avg``: the balanced couplings, and each mode's radius (it does not depend on
+    # the lattice; a finer lattice's confirmation asks again for the modes it settles)
+    cache = getattr(avg, "_gershgorin", None)
+    if cache is None or cache[0] is not system:
+        radii: dict[int, float] = {}
+        cache = (system, _coupling_terms(system, avg), radii)
+        avg._gershgorin = cache  # type: ignore[attr-defined]
+    _, terms, known = cache
     missing = sorted({int(m) for m in modes if int(m) not in known})
     if missing:
-        known.update(zip(missing, _radii(system, avg, missing), strict=True))
-    avg._gershgorin_radii = known  # type: ignore[attr-defined]
-    avg._gershgorin_system = system  # type: ignore[attr-defined]
+        known.update(zip(missing, _radii(system, avg, terms, missing), strict=True))
     return [known[int(m)] for m in modes]
 
 
-def _radii(system: PeriodicSystem, avg: _Averaged, modes: list[int]) -> list[float]:
+def _coupling_terms(system: PeriodicSystem, avg: _Averaged) -> list[tuple[Any, ...]]:
+    """Per coefficient harmonic ``k``: ``(k, *_compact(...))`` of the balanced couplings."""
+    Tq, Tv = sp.diags_array(1.0 / avg.sq), sp.diags_array(1.0 / avg.sv)
+    terms = []
+    for k in system.coefficient_harmonics:
+        mats = [
+            sp.csr_array(Tv @ sp.csr_array(system.K[k]) @ Tq) if k in system.K else None,
+            sp.csr_array(Tv @ sp.csr_array(system.D[k]) @ Tv) if k in system.D else None,
+            sp.csr_array(Tv @ sp.csr_array(system.M[k]) @ Tv) if k in system.M else None,
+        ]
+        terms.append((k, *_compact(mats)))
+    return terms
+
+
+def _radii(
+    system: PeriodicSystem, avg: _Averaged, terms: list[tuple[Any, ...]], modes: list[int]
+) -> list[float]:
     """The radii of :func:`_gershgorin`, computed."""
     n, w = system.n, system.omega
     Wr = avg.W[:, modes].conj().T  # rows of the modal transform
     out = np.zeros(len(modes))
-    cached = getattr(avg, "_gershgorin_terms", None)
-    if cached is None or cached[0] is not system:  # the balanced couplings, once per system
-        Tq, Tv = sp.diags_array(1.0 / avg.sq), sp.diags_array(1.0 / avg.sv)
-        terms = []
-        for k in system.coefficient_harmonics:
-            mats = [
-                sp.csr_array(Tv @ sp.csr_array(system.K[k]) @ Tq) if k in system.K else None,
-                sp.csr_array(Tv @ sp.csr_array(system.D[k]) @ Tv) if k in system.D else None,
-                sp.csr_array(Tv @ sp.csr_array(system.M[k]) @ Tv) if k in system.M else None,
-            ]
-            terms.append((k, *_compact(mats)))
-        cached = (system, terms)
-        avg._gershgorin_terms = cached  # type: ignore[attr-defined]
     low = Wr[:, n:]  # the couplings act on the v rows
-    for k, rows, cq, cv, Kc, Dc, Mc in cached[1]:
+    for k, rows, cq, cv, Kc, Dc, Mc in terms:
         if rows.size == 0:
             continue
         lr = low[:, rows]

@@ -98,10 +98,9 @@ def lattice_exponents(
     nh = H.size
     if 0 not in set(H.tolist()):
         raise ValueError("the lattice must contain harmonic 0")
-    same = same_system and start is not None
-    avg = (
-        start.modes if same and start is not None and start.modes is not None else _Averaged(system)
-    )
+    # of this system: its averaged modes and Liouville sum hold here too
+    same = start if same_system else None
+    avg = same.modes if same is not None and same.modes is not None else _Averaged(system)
     hill = LatticeHill(system, H)
     sq_rep, sv_rep = np.tile(avg.sq, nh), np.tile(avg.sv, nh)
     Mconv = hill.inner.Mconv()
@@ -416,7 +415,7 @@ def lattice_exponents(
             [c.forced or c.edge > UNRESOLVED_EDGE for c, cj in reps for _ in range(2 if cj else 1)],
             dtype=bool,
         ),
-        liouville=start.liouville if same and start is not None else liouville_sum(system),
+        liouville=same.liouville if same is not None else liouville_sum(system),
         info=info,
         vectors=vectors,
         indices=H,

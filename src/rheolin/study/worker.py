@@ -16,9 +16,10 @@ import time
 import warnings
 from collections import OrderedDict
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
+import numpy as np
 import xarray as xr
 from threadpoolctl import threadpool_limits
 
@@ -119,10 +120,6 @@ class _Chain:
 
     def start(self, point: int) -> tuple[Any, Any]:
         """``(x0, continuation)`` for ``point``."""
-        import dataclasses
-
-        import numpy as np
-
         spec = self.spec
         linked = (
             self.last is not None
@@ -141,12 +138,10 @@ class _Chain:
             w0, s0 = self.history[0]
             if np.array_equal(s0.harmonics, s1.harmonics) and w1 != w0:
                 q = s1.q + (s1.q - s0.q) * ((w - w1) / (w1 - w0))
-                return dataclasses.replace(s1, q=q), self.continuation
+                return replace(s1, q=q), self.continuation
         return s1, self.continuation
 
     def done(self, point: int, solution: Any) -> None:
-        import numpy as np
-
         self.last = point
         if not np.all(np.isfinite(solution.q)):
             self.history.clear()
