@@ -372,7 +372,14 @@ def _floquet_lattice(
             if est_finer > resolve_budget(budget):
                 break
             used = max(used, est_finer)
-            out = confirm_unresolved(system, out, finer)
+            previous = (
+                continuation.start(system.n, finer)
+                if continuation is not None and near is None
+                else None
+            )
+            out, fine = confirm_unresolved(system, out, finer, previous)
+            if continuation is not None and fine is not None:
+                continuation.keep(system.n, finer, fine)
             step = out.info.pop("confirmed")
             steps.append(step)
             if not step["clusters"]:

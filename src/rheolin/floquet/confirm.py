@@ -16,8 +16,11 @@ __all__ = ["confirm_unresolved"]
 
 
 def confirm_unresolved(
-    system: PeriodicSystem, out: LatticeExponents, finer: Lattice
-) -> LatticeExponents:
+    system: PeriodicSystem,
+    out: LatticeExponents,
+    finer: Lattice,
+    previous: LatticeExponents | None = None,
+) -> tuple[LatticeExponents, LatticeExponents | None]:
     """Settle the unresolved, uncertified representatives on a finer lattice.
 
     Their clusters are searched again on ``finer`` (only near them), each from its coarse
@@ -29,11 +32,16 @@ def confirm_unresolved(
     part is negative at both orders and changes by less than ``1 / TRUNCATION_SAFETY`` of
     its size (the verdict does not move with the truncation). Records
     ``info["confirmed"]``.
+
+    ``previous``: the finer lattice's search at the previous speed of a sweep
+    (:class:`~rheolin.floquet.Continuation`); the clusters it covers start from its
+    eigenvectors (a few Arnoldi steps), the others from the coarse ones. Returns ``out`` and
+    the finer search (None: nothing to settle), which the next speed can start from.
     """
     todo = out.unresolved & ~out.certified
     if not todo.any():
         out.info["confirmed"] = {"order": finer.order, "clusters": 0, "replaced": 0, "confirmed": 0}
-        return out
+        return out, None
     # upper half plane, real centres included (their imaginary parts are rounding, of
     # either sign)
     upper = out.centre.imag >= -1e-9 * np.maximum(np.abs(out.centre), system.omega)
@@ -46,8 +54,13 @@ def confirm_unresolved(
     centres = centres[np.isfinite(centres)]
     if centres.size == 0:
         out.info["confirmed"] = {"order": finer.order, "clusters": 0, "replaced": 0, "confirmed": 0}
-        return out
-    fine = lattice_exponents(system, finer, near=centres, start=out)
+        return out, None
+    if previous is not None:
+        fine = lattice_exponents(
+            system, finer, near=centres, start=previous, same_system=False, coarse=out
+        )
+    else:
+        fine = lattice_exponents(system, finer, near=centres, start=out)
     fields = (
         "exponents", "bounds", "truncation", "edge", "centroid", "dominant", "certified",
         "centre", "unresolved", "order", "uncertainty", "radius",
@@ -126,4 +139,4 @@ def confirm_unresolved(
         "confirmed": confirmed,
         "warm_starts": int(fine.info.get("warm_starts", 0)),
     }
-    return out
+    return out, fine

@@ -2,8 +2,11 @@
 
 Over a fine speed grid the Floquet exponents and their eigenvectors move little from one speed
 to the next. A :class:`Continuation` passed to :func:`rheolin.floquet` keeps the lattice
-eigenvectors of each call (one set per lattice order); the next call's searches start from
-them, as a finer lattice's searches start from a coarser one's (docs/stability.md). Only the
+eigenvectors of each call (one set per lattice order, the finer lattices' confirmations
+included); the next call's searches start from them, as a finer lattice's searches start from
+a coarser one's (docs/stability.md). A confirmation starts only from the previous speed's
+resolved exponents (an unresolved one's continuation is unresolved again, where a search from
+this speed's coarse vectors may find a centred copy). Only the
 starting vectors change: every cluster is still searched until its own test is met, so the
 verdict and its checks are those of a call without one. A cluster whose time-averaged
 exponents moved by more than ``CLUSTER_TOL`` starts cold, and so does every search after a

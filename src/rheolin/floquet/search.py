@@ -80,6 +80,7 @@ def lattice_exponents(
     near: np.ndarray | None = None,
     start: LatticeExponents | None = None,
     same_system: bool = True,
+    coarse: LatticeExponents | None = None,
 ) -> LatticeExponents:
     """Representatives of the Floquet exponents of ``system`` on ``lattice``.
 
@@ -91,6 +92,9 @@ def lattice_exponents(
     ``start`` is of a nearby system (the previous speed of a sweep, on a lattice with the same
     or fewer harmonics): only its eigenvectors are used, for the clusters whose time-averaged
     exponents have not moved by more than ``CLUSTER_TOL`` (the others start cold).
+    ``coarse`` (with such a ``start``): the representatives of a coarser lattice of this
+    system, for the clusters ``start`` does not cover (a finer lattice's confirmation over a
+    sweep: the previous speed's fine vectors first, this speed's coarse ones otherwise).
     """
     t0 = time.perf_counter()
     n, w = system.n, system.omega
@@ -99,7 +103,7 @@ def lattice_exponents(
     if 0 not in set(H.tolist()):
         raise ValueError("the lattice must contain harmonic 0")
     # of this system: its averaged modes and Liouville sum hold here too
-    same = start if same_system else None
+    same = start if same_system else coarse
     avg = same.modes if same is not None and same.modes is not None else _Averaged(system)
     hill = LatticeHill(system, H)
     sq_rep, sv_rep = np.tile(avg.sq, nh), np.tile(avg.sv, nh)
@@ -187,7 +191,10 @@ def lattice_exponents(
         cluster = clusters[cid]
         sigma = complex(np.mean(lam0[cluster]))
         need = quotas[cid]
-        warm, at = _warm_start(start, H, n, sigma, w, rng)
+        warm, at = _warm_start(start, H, n, sigma, w, rng, resolved=coarse is not None)
+        steps = WARM_STEPS if warm is not None and not same_system else ARNOLDI_STEPS
+        if warm is None and not same_system:
+            warm, at = _warm_start(coarse, H, n, sigma, w, rng)
         if warm is not None:
             sigma = at  # where the coarse exponents are: their continuations converge first
             warm_starts.append(cid)
@@ -260,7 +267,6 @@ def lattice_exponents(
         stall = [0, np.inf]  # checkpoints seen, best centroid of the cluster's candidates
         if warm is not None:
             warm_unit = warm / np.linalg.norm(warm, axis=0)
-        steps = WARM_STEPS if warm is not None and not same_system else ARNOLDI_STEPS
         _arnoldi(apply, v0, accept, steps=steps, tol=ARNOLDI_TOL)
         arnoldi_seconds += time.perf_counter() - t2
         for c in found_here:
@@ -460,6 +466,7 @@ def _warm_start(
     sigma: complex,
     w: float,
     rng: np.random.Generator,
+    resolved: bool = False,
 ) -> tuple[np.ndarray | None, complex]:
     """The coarse eigenvectors of the cluster centred at ``sigma``, moved onto the harmonics
     ``H`` with random weights, one per column, and the mean of their exponents (None: none
@@ -476,7 +483,7 @@ def _warm_start(
     mine = [
         i
         for i, (z, v) in enumerate(zip(start.centre, start.vectors, strict=True))
-        if v is not None and abs(z - sigma) <= tol
+        if v is not None and abs(z - sigma) <= tol and not (resolved and start.unresolved[i])
     ]
     if not mine:
         return None, sigma
@@ -547,11 +554,13 @@ class _Shifted:
 #: installed; the analysis is made once per lattice and serves every shift), for a factor
 #: used a few times (the polish, a warm-started Arnoldi run) and one used for a whole cold
 #: Arnoldi run. On the gearbox (one thread; PARDISO refining only after perturbed pivots,
-#: SuperLU in symmetric mode), factor / solve: order 2 (4,410 unknowns) 2.7 / 0.5 ms against
-#: 5-7 / 0.25 ms; order 3 (14,994) 11.5 / 2.1 ms against 25-40 / 1.2 ms; order 4 (41,454)
-#: 74 / 5.5 ms against 550 / 11 ms. A cold Arnoldi run (up to 54 steps) favours SuperLU's
-#: solves up to order 3.
-PARDISO_ABOVE = 10000
+#: SuperLU in symmetric mode), factor / solve: order 1 (882 unknowns) 0.33 / 0.085 ms against
+#: 0.40 / 0.040 ms; order 2 (4,410) 1.9-2.7 / 0.4-0.5 ms against 2.4-7 / 0.2-0.25 ms (SuperLU's
+#: pivoting varies with the shift: 4.3 ms on average over a gearbox verdict, whose order-2
+#: confirmation took 0.12 s less per speed with PARDISO); order 3 (14,994) 10-11.5 / 1.4-2.1 ms
+#: against 18-40 / 1.0-1.2 ms; order 4 (41,454) 74 / 5.5 ms against 550 / 11 ms. A cold Arnoldi
+#: run (up to 54 steps) favours SuperLU's solves up to order 3.
+PARDISO_ABOVE = 2000
 PARDISO_ABOVE_ARNOLDI = 30000
 
 
