@@ -14,12 +14,10 @@ Nothing is quadratic in the lattice size.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 import scipy.sparse as sp
 
-from .operator import _Block
+from .operator import _Block, coefficient_blocks
 from .system import PeriodicSystem
 
 __all__ = ["LatticeHill"]
@@ -128,19 +126,7 @@ class LatticeHill:
         self.H = np.asarray(H, dtype=np.int64)
         self.n = system.n
         self.w = system.omega
-        sparse = system.is_sparse
-
-        def get(table: dict, k: int) -> Any:
-            x = table.get(k)
-            if x is None:
-                return None
-            return sp.csr_array(x) if sparse else np.asarray(x)
-
-        keys = [0, *system.coefficient_harmonics]
-        self.blocks = {
-            k: _Block(get(system.M, k), get(system.D, k), get(system.K, k), self.n, sparse)
-            for k in keys
-        }
+        self.blocks = coefficient_blocks(system)
         self.inner = _Coupling(self.blocks, self.H, self.H, self.n)
         self._outer: tuple[np.ndarray, _Coupling, _Coupling] | None = None
         self.size = self.H.size * self.n

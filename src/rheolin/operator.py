@@ -101,6 +101,28 @@ class _Block:
         return out
 
 
+def coefficient_blocks(system: PeriodicSystem) -> dict[int, _Block]:
+    """The :class:`_Block` of every coefficient harmonic of ``system`` (0 first), built once
+    per system and kept on it (the solve, the stability check and its memory estimate all use
+    them; a system's coefficients are not changed once it is built)."""
+    cache = system.__dict__.get("_coefficient_blocks")
+    if cache is None:
+        sparse = system.is_sparse
+
+        def get(table: dict, k: int) -> Any:
+            x = table.get(k)
+            if x is None:
+                return None
+            return sp.csr_array(x) if sparse else np.asarray(x)
+
+        cache = {
+            k: _Block(get(system.M, k), get(system.D, k), get(system.K, k), system.n, sparse)
+            for k in [0, *system.coefficient_harmonics]
+        }
+        system.__dict__["_coefficient_blocks"] = cache
+    return dict(cache)
+
+
 class HarmonicBalance:
     """Harmonic-balance operator; stores and solves only the harmonics ``n >= 0``.
 
@@ -149,7 +171,7 @@ class HarmonicBalance:
         self._inverse: BlockInverse | None = None
         self._last_residual: tuple[np.ndarray, int, np.ndarray] | None = None
         self._support_maps: tuple[Any, sp.csr_array, sp.csr_array] | None = None
-        self._blocks = {k: self._block(k) for k in [0, *system.coefficient_harmonics]}
+        self._blocks = coefficient_blocks(system)
         self.pencil = self._pencil()
         self._coupling = self._coupling_maps()
         self.sparse_backend = sparse_backend
@@ -163,16 +185,6 @@ class HarmonicBalance:
         self.rhs_norm = self.norm(self.rhs)
 
     # ------------------------------------------------------------------ structure
-    def _block(self, k: int) -> _Block:
-        def get(table: dict) -> Any:
-            x = table.get(k)
-            if x is None:
-                return None
-            return sp.csr_array(x) if self.sparse else np.asarray(x)
-
-        s = self.system
-        return _Block(get(s.M), get(s.D), get(s.K), self.n_dof, self.sparse)
-
     def _pencil(self) -> Pencil:
         """``A0(n)`` on the union pattern of ``K_0, D_0, M_0`` (built once from block 0)."""
         s = self.system

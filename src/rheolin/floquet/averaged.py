@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
-from ..hill import hill_pencil, state_scaling
+from ..hill import state_scaling
 from ..lattice import Lattice
-from ..operator import _Block
+from ..operator import coefficient_blocks
 from ..system import PeriodicSystem
 from .result import _EPS
 
@@ -39,12 +39,19 @@ class _Averaged:
                 f"densely (2 n = {2 * n} > {MAX_AVERAGED_DENSE}); reduce the model "
                 "(condensed bodies) or give a dense harmonic set with method='sparse'"
             )
-        A, B = hill_pencil(system, [0])
-        Ad, Bd = A.toarray(), B.toarray()
-        if np.linalg.cond(Bd) <= STANDARD_COND:
-            # left vectors of the pencil from those of B^-1 A: w^H B^-1 A = lam w^H B^-1
-            lam, Y, X = sla.eig(np.linalg.solve(Bd, Ad), left=True, right=True, check_finite=False)
-            W = np.linalg.solve(Bd.conj().T, Y)
+        self.sq, self.sv = sq, sv = state_scaling(system)
+        Ad, Bd, Ms = _averaged_pencil(system, sq, sv)
+        # cond(B) from the balanced mass block (B = diag(I, M))
+        mu = np.linalg.svd(Ms, compute_uv=False) if n else np.ones(1)
+        hi, lo = max(float(mu.max()), 1.0), min(float(mu.min()), 1.0)
+        if lo > 0 and hi / lo <= STANDARD_COND:
+            # B^-1 A by blocks (B = diag(I, M)); left vectors of the pencil from those of
+            # B^-1 A: w^H B^-1 A = lam w^H B^-1
+            C = Ad.copy()
+            C[n:] = np.linalg.solve(Ms, Ad[n:])
+            lam, Y, X = sla.eig(C, left=True, right=True, check_finite=False, overwrite_a=True)
+            W = np.array(Y, dtype=complex)
+            W[n:] = np.linalg.solve(Ms.conj().T, W[n:])
         else:
             lam, W, X = sla.eig(Ad, Bd, left=True, right=True, check_finite=False)
         finite = np.isfinite(lam)
@@ -62,8 +69,37 @@ class _Averaged:
         cond = np.linalg.norm(self.W, axis=0) / np.maximum(np.abs(d), np.finfo(float).tiny)
         self.bound = _EPS * (normA + np.abs(self.lam) * normB) * np.where(ok, cond, np.inf)
         self.modal = bool(ok.all()) and self.lam.size == 2 * n
-        self.sq, self.sv = state_scaling(system)
         self.n = n
+
+
+def _averaged_pencil(
+    system: PeriodicSystem, sq: np.ndarray, sv: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The balanced time-averaged pencil ``(A, B)`` of :func:`rheolin.hill.hill_pencil` on
+    harmonic 0, dense, and its mass block: ``A = [[0, S_q S_v^-1], [-K, -D]]``,
+    ``B = diag(I, M)`` with ``K = S_v^-1 K_0 S_q^-1``, ``D = S_v^-1 D_0 S_v^-1``,
+    ``M = S_v^-1 M_0 S_v^-1``."""
+    n = system.n
+
+    def dense(table: dict, right: np.ndarray) -> np.ndarray:
+        x = table.get(0)
+        if x is None:
+            return np.zeros((n, n))
+        x = x.toarray() if hasattr(x, "toarray") else np.asarray(x)
+        return np.asarray(x) / sv[:, None] / right[None, :]
+
+    Ks, Ds, Ms = dense(system.K, sq), dense(system.D, sv), dense(system.M, sv)
+    # real coefficients (the usual case): a real eigenproblem, whose complex exponents come
+    # in exact conjugate pairs
+    dtype = np.result_type(Ks, Ds, Ms, float)
+    A = np.zeros((2 * n, 2 * n), dtype=dtype)
+    B = np.zeros((2 * n, 2 * n), dtype=dtype)
+    A[np.arange(n), n + np.arange(n)] = sq / sv
+    A[n:, :n] = -Ks
+    A[n:, n:] = -Ds
+    B[np.arange(n), np.arange(n)] = 1.0
+    B[n:, n:] = Ms
+    return A, B, Ms
 
 
 def lattice_memory(system: PeriodicSystem, lattice: Lattice, k: int = 8) -> int:
@@ -76,12 +112,11 @@ def lattice_memory(system: PeriodicSystem, lattice: Lattice, k: int = 8) -> int:
     H = lattice.indices
     n = system.n
     nnz = 0
-    for k_h in [0, *system.coefficient_harmonics]:
+    for k_h, block in coefficient_blocks(system).items():
         pos = np.minimum(np.searchsorted(H, H + k_h), H.size - 1)
         pairs = int(np.count_nonzero(H[pos] == H + k_h))
         if not pairs:
             continue
-        block = _Block(system.M.get(k_h), system.D.get(k_h), system.K.get(k_h), n, system.is_sparse)
         nnz += pairs * int(block.entries()[0].size)
     from .search import ARNOLDI_STEPS
 

@@ -100,16 +100,33 @@ def _gershgorin(system: PeriodicSystem, avg: _Averaged, modes: list[int]) -> lis
 
 def _coupling_terms(system: PeriodicSystem, avg: _Averaged) -> list[tuple[Any, ...]]:
     """Per coefficient harmonic ``k``: ``(k, *_compact(...))`` of the balanced couplings."""
-    Tq, Tv = sp.diags_array(1.0 / avg.sq), sp.diags_array(1.0 / avg.sv)
+    iq, iv = 1.0 / avg.sq, 1.0 / avg.sv
     terms = []
     for k in system.coefficient_harmonics:
         mats = [
-            sp.csr_array(Tv @ sp.csr_array(system.K[k]) @ Tq) if k in system.K else None,
-            sp.csr_array(Tv @ sp.csr_array(system.D[k]) @ Tv) if k in system.D else None,
-            sp.csr_array(Tv @ sp.csr_array(system.M[k]) @ Tv) if k in system.M else None,
+            _scaled(system.K.get(k), iv, iq),
+            _scaled(system.D.get(k), iv, iv),
+            _scaled(system.M.get(k), iv, iv),
         ]
         terms.append((k, *_compact(mats)))
     return terms
+
+
+def _scaled(x: Any, left: np.ndarray, right: np.ndarray) -> Any:
+    """The nonzero entries ``(rows, cols, values)`` of ``diag(left) x diag(right)`` (None:
+    no such coefficient)."""
+    if x is None:
+        return None
+    if sp.issparse(x):
+        coo = sp.coo_array(x)
+        r, c, v = coo.row, coo.col, coo.data
+    else:
+        x = np.asarray(x)
+        r, c = np.nonzero(x)
+        v = x[r, c]
+    keep = v != 0
+    r, c = r[keep].astype(np.int64), c[keep].astype(np.int64)
+    return r, c, v[keep] * left[r] * right[c]
 
 
 def _radii(
@@ -140,25 +157,21 @@ def _radii(
 
 
 def _compact(mats: list[Any]) -> tuple[Any, ...]:
-    """``(rows, q columns, v columns, K, D, M)``: the coupling matrices (balanced, CSR, None
-    where absent) as dense blocks on their nonzero rows and columns (K on the q columns, D
-    and M on the v columns)."""
-
-    def nz_rows(a: Any) -> np.ndarray:
-        return np.flatnonzero(np.diff(a.indptr)) if a is not None else np.zeros(0, int)
-
-    def nz_cols(a: Any) -> np.ndarray:
-        return np.unique(a.indices[a.data != 0]) if a is not None else np.zeros(0, int)
-
+    """``(rows, q columns, v columns, K, D, M)``: the coupling matrices (entries from
+    :func:`_scaled`, None where absent) as dense blocks on their nonzero rows and columns (K
+    on the q columns, D and M on the v columns)."""
+    none = np.zeros(0, dtype=np.int64)
     K, D, M = mats
-    rows = np.unique(np.concatenate([nz_rows(a) for a in mats]))
-    cq = nz_cols(K)
-    cv = np.unique(np.concatenate([nz_cols(D), nz_cols(M)]))
+    rows = np.unique(np.concatenate([a[0] for a in mats if a is not None] + [none]))
+    cq = np.unique(K[1]) if K is not None else none
+    cv = np.unique(np.concatenate([a[1] for a in (D, M) if a is not None] + [none]))
 
     def block(a: Any, cols: np.ndarray) -> np.ndarray | None:
         if a is None:
             return None
-        return np.asarray(a[rows][:, cols].toarray(), dtype=complex)
+        out = np.zeros((rows.size, cols.size), dtype=complex)
+        np.add.at(out, (np.searchsorted(rows, a[0]), np.searchsorted(cols, a[1])), a[2])
+        return out
 
     return rows, cq, cv, block(K, cq), block(D, cv), block(M, cv)
 
@@ -210,14 +223,25 @@ def liouville_sum(system: PeriodicSystem) -> tuple[float, float]:
     if not np.all(np.isfinite(Minv)) or np.linalg.cond(dense(M0)) > 1e12:
         return float("nan"), float("inf")
     D0 = dense(system.D[0]) if 0 in system.D else np.zeros((n, n))
-    value = float(np.trace(Minv @ D0).real)
+    G = Minv @ D0
+    value = float(np.trace(G).real)
     second = 0.0
     for k, Mk in system.M.items():
         if k == 0:
             continue
-        A = Minv @ dense(Mk)
-        term = -np.trace(A @ Minv @ dense(system.D[-k])) if -k in system.D else 0.0
-        term = term + np.trace(A @ Minv @ dense(system.M[-k]) @ Minv @ D0)
+        # tr(P Y) with P = M0^-1 M_k nonzero on the columns c of M_k only: the sum over
+        # P[:, c] * Y[c, :]^T (M_k touches a few DOFs: no n x n products per harmonic)
+        Mk = dense(Mk)
+        r = np.flatnonzero(np.any(Mk != 0, axis=1))
+        c = np.flatnonzero(np.any(Mk != 0, axis=0))
+        if not c.size:
+            continue
+        P = Minv[:, r] @ Mk[np.ix_(r, c)]
+        term = 0.0
+        if -k in system.D:  # tr(M0^-1 M_k M0^-1 D_-k)
+            term = term - np.sum(P * (Minv[c] @ dense(system.D[-k])).T)
+        if -k in system.M:  # tr(M0^-1 M_k M0^-1 M_-k M0^-1 D_0)
+            term = term + np.sum(P * ((Minv[c] @ dense(system.M[-k])) @ G).T)
         second += float(np.real(term))
     return -(value + second), abs(second) + 1e-12 * abs(value)
 

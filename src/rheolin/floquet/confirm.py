@@ -57,10 +57,16 @@ def confirm_unresolved(
         return out, None
     if previous is not None:
         fine = lattice_exponents(
-            system, finer, near=centres, start=previous, same_system=False, coarse=out
+            system,
+            finer,
+            near=centres,
+            start=previous,
+            same_system=False,
+            coarse=out,
+            defer_truncation=True,
         )
     else:
-        fine = lattice_exponents(system, finer, near=centres, start=out)
+        fine = lattice_exponents(system, finer, near=centres, start=out, defer_truncation=True)
     fields = (
         "exponents", "bounds", "truncation", "edge", "centroid", "dominant", "certified",
         "centre", "unresolved", "order", "uncertainty", "radius",
@@ -118,6 +124,8 @@ def confirm_unresolved(
             out.certified[hit] = True
             out.uncertainty[hit] = np.maximum(out.uncertainty[hit], TRUNCATION_SAFETY * abs(a - b))
             confirmed += len(left)
+    if fine.settle is not None:  # the truncation estimates of the exponents taken
+        fine.settle(np.flatnonzero(take))
     for name in fields:
         setattr(out, name, np.concatenate([getattr(out, name)[keep], getattr(fine, name)[take]]))
     out.partner = [p for p, k in zip(out.partner, keep, strict=True) if k] + [

@@ -44,6 +44,9 @@ class LatticeExponents:
     indices: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     #: the time-averaged modes (``_Averaged``) the search started from
     modes: Any = field(default=None, repr=False)
+    #: truncation estimates not computed yet (``defer_truncation``): ``rows -> None`` fills
+    #: ``truncation`` and raises ``uncertainty`` on those rows
+    settle: Any = field(default=None, repr=False)
 
     @property
     def complete(self) -> bool:

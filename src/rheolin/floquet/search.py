@@ -81,6 +81,7 @@ def lattice_exponents(
     start: LatticeExponents | None = None,
     same_system: bool = True,
     coarse: LatticeExponents | None = None,
+    defer_truncation: bool = False,
 ) -> LatticeExponents:
     """Representatives of the Floquet exponents of ``system`` on ``lattice``.
 
@@ -95,6 +96,8 @@ def lattice_exponents(
     ``coarse`` (with such a ``start``): the representatives of a coarser lattice of this
     system, for the clusters ``start`` does not cover (a finer lattice's confirmation over a
     sweep: the previous speed's fine vectors first, this speed's coarse ones otherwise).
+    ``defer_truncation``: the truncation estimates are left to the result's ``settle(rows)``
+    (a confirmation keeps only some of the finer lattice's exponents; NaN until settled).
     """
     t0 = time.perf_counter()
     n, w = system.n, system.omega
@@ -329,7 +332,8 @@ def lattice_exponents(
     def B_b(xb: np.ndarray) -> np.ndarray:  # the balanced first-order B times xb
         return np.concatenate([xb[: n * nh], Mb @ xb[n * nh :]])
 
-    lams, bounds, trunc, edges, cents, doms, partners = [], [], [], [], [], [], []
+    lams: list[complex] = []
+    bounds, trunc, edges, cents, doms, partners = [], [], [], [], [], []
     vectors: list[np.ndarray | None] = []
     certified: list[bool] = []
     centres: list[complex] = []
@@ -338,6 +342,7 @@ def lattice_exponents(
     radii: list[float] = []
     conj_index = _conjugate_index(lam0)
     outer = _Outer(hill, avg) if nh > 0 else None
+    deferred: list[tuple[int, complex, np.ndarray, np.ndarray]] = []  # (first row, lam, q, u)
     radius: dict[int, float] = {}
     for c, conj_too in reps:
         # a representative the truncation does not resolve (its energy on the outer shells,
@@ -360,7 +365,13 @@ def lattice_exponents(
         denom = abs(np.vdot(yb, B_b(xb)))
         nx, ny = np.linalg.norm(xb), np.linalg.norm(yb)
         bound = _EPS * (normA + abs(lam_c) * normB) * nx * ny / max(denom, np.finfo(float).tiny)
-        tau = outer.estimate(lam_c, xq, u) if outer is not None else 0.0
+        if outer is None:
+            tau = 0.0
+        elif defer_truncation:
+            tau = float("nan")
+            deferred.append((len(lams), lam_c, xq, u))
+        else:
+            tau = outer.estimate(lam_c, xq, u)
         part = _partner(c, H, n, avg.WB, conj_index)
         for lam_i in [c.lam, np.conj(c.lam)] if conj_too else [c.lam]:
             lams.append(complex(lam_i))
@@ -376,7 +387,7 @@ def lattice_exponents(
                 else (-part[0], int(conj_index[part[1]]), int(conj_index[part[2]]))
             )
             certified.append(ok if unresolved else False)
-            spread.append(max(TRUNCATION_SAFETY * tau, disc))
+            spread.append(disc if np.isnan(tau) else max(TRUNCATION_SAFETY * tau, disc))
             members = clusters[c.home] if c.home >= 0 else np.zeros(0, int)
             mid = complex(np.mean(lam0[members])) if members.size else complex("nan")
             centres.append(mid if lam_i == c.lam else complex(np.conj(mid)))
@@ -399,7 +410,7 @@ def lattice_exponents(
         ),
         "certified_radii": np.concatenate([discs[clusters[c]] for c in skipped] + [np.zeros(0)]),
     }
-    return LatticeExponents(
+    result = LatticeExponents(
         exponents=np.array(lams, dtype=complex),
         bounds=np.array(bounds, dtype=float),
         truncation=np.array(trunc, dtype=float),
@@ -427,6 +438,34 @@ def lattice_exponents(
         indices=H,
         modes=avg,
     )
+    if deferred and outer is not None:
+        result.settle = _settler(result, outer, deferred)
+    return result
+
+
+def _settler(
+    out: LatticeExponents,
+    outer: _Outer,
+    deferred: list[tuple[int, complex, np.ndarray, np.ndarray]],
+) -> Any:
+    """``rows -> None``: the truncation estimates of those rows (a representative's row and
+    its conjugate's share one), computed once each."""
+    first = np.array([d[0] for d in deferred], dtype=int)
+
+    def settle(rows: np.ndarray) -> None:
+        for row in np.asarray(rows, dtype=int):
+            if not np.isnan(out.truncation[row]):
+                continue
+            i = int(np.searchsorted(first, row, side="right")) - 1
+            start, lam, q, u = deferred[i]
+            end = int(first[i + 1]) if i + 1 < first.size else out.exponents.size
+            tau = outer.estimate(lam, q, u)
+            out.truncation[start:end] = tau
+            out.uncertainty[start:end] = np.maximum(
+                out.uncertainty[start:end], TRUNCATION_SAFETY * tau
+            )
+
+    return settle
 
 
 def _pencil_norms(hill: LatticeHill, sq: np.ndarray, sv: np.ndarray) -> tuple[float, float]:
