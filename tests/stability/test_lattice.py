@@ -524,3 +524,34 @@ def test_unresolved_exponents_continued_on_the_finer_lattice() -> None:
     ref = monodromy_max_real(system)
     assert res.decided and not res.stable
     assert abs(res.max_real - ref) <= res.info["uncertainty"][0]
+
+
+def test_tracked_exponents_against_the_monodromy_matrix() -> None:
+    """Over a fine sweep each exponent is continued from the previous call's (one polish, no
+    Arnoldi search) while that passes the search's own tests. Damped Mathieu: (1) the
+    stiffness ``a`` rising into the first instability band (tracked up to the band's edge,
+    searched there); (2) the damping falling through zero outside the bands (a tracked
+    exponent crossing the axis). Every verdict equals the monodromy matrix's, the largest real
+    part within its stated uncertainty, and most calls were tracked."""
+    from test_floquet_robust import _monodromy_stable
+
+    from rheolin.floquet import Continuation
+
+    sweeps = [
+        [(a, 0.3, 0.02) for a in np.linspace(0.66, 0.74, 41)],
+        [(1.6, 0.3, z) for z in np.linspace(0.0095, -0.0095, 20)],
+    ]
+    tracked = 0
+    for sweep in sweeps:
+        cont = Continuation()
+        for a, q, z in sweep:
+            s = mathieu(a, q, z)
+            res = rl.floquet(s, method="lattice", order=6, continuation=cont)
+            ref = monodromy_max_real(s)
+            assert res.decided or abs(ref) < 1e-9, (a, q, z)
+            if res.decided:
+                assert res.stable == _monodromy_stable(a, q, z), (a, q, z)
+            lead = int(np.argmax(res.exponents.real))
+            assert abs(res.max_real - ref) <= res.info["uncertainty"][lead] + 1e-9, (a, z)
+            tracked += int(res.info["tracked"] > 0)
+    assert tracked >= 25

@@ -69,7 +69,7 @@ def confirm_unresolved(
         fine = lattice_exponents(system, finer, near=centres, start=out, defer_truncation=True)
     fields = (
         "exponents", "bounds", "truncation", "edge", "centroid", "dominant", "certified",
-        "centre", "unresolved", "order", "uncertainty", "radius",
+        "centre", "unresolved", "order", "uncertainty", "radius", "rate",
     )  # fmt: skip
     keep = np.ones(out.exponents.size, dtype=bool)
     take = np.zeros(fine.exponents.size, dtype=bool)
@@ -146,5 +146,6 @@ def confirm_unresolved(
         "replaced": replaced,
         "confirmed": confirmed,
         "warm_starts": int(fine.info.get("warm_starts", 0)),
+        "tracked": int(fine.info.get("tracked", 0)),
     }
     return out, fine

@@ -47,6 +47,9 @@ class LatticeExponents:
     #: truncation estimates not computed yet (``defer_truncation``): ``rows -> None`` fills
     #: ``truncation`` and raises ``uncertainty`` on those rows
     settle: Any = field(default=None, repr=False)
+    #: per row, a tracked exponent's move per move of its averaged exponent since the
+    #: previous call (NaN: not tracked); the next call's prediction
+    rate: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=complex))
 
     @property
     def complete(self) -> bool:

@@ -55,6 +55,19 @@ ARNOLDI_TOL = 1e-10
 #: finer one: those searches keep :data:`ARNOLDI_STEPS`.
 WARM_STEPS = (4, *ARNOLDI_STEPS)
 
+#: Tracking (a search continued from the previous speed on the same lattice): each of a
+#: cluster's previous representatives is moved by its cluster's averaged shift and polished
+#: there (one LU, three solves: no Arnoldi run). Accepted when every one converges to a
+#: backward error below this (relative, of the balanced first-order pencil), is centred and
+#: stands for its cluster only, and together they meet the cluster's quota as distinct
+#: exponents (the test a search meets); otherwise the cluster is searched.
+TRACK_TOL = 1e-10
+
+#: Polish steps (an LU each) a tracked exponent may take to meet :data:`TRACK_TOL` (the
+#: averaged shift predicts the gearbox's exponents to 0.1-4 rad/s from one speed to the next:
+#: one step leaves a backward error of 1e-10 to 1e-9 on some).
+TRACK_POLISH = 2
+
 #: Classical Gram-Schmidt is repeated when it cancels more than this fraction of the vector
 #: (Daniel, Gragg, Kaufman and Stewart's criterion, 1/sqrt(2)): orthogonal to working
 #: precision at half the cost of always orthogonalizing twice.
@@ -194,7 +207,16 @@ def lattice_exponents(
         cluster = clusters[cid]
         sigma = complex(np.mean(lam0[cluster]))
         need = quotas[cid]
-        warm, at = _warm_start(start, H, n, sigma, w, rng, resolved=coarse is not None)
+        warm, at = _warm_start(
+            start,
+            H,
+            n,
+            sigma,
+            w,
+            rng,
+            resolved=coarse is not None,
+            rows=None if same_system else previous(cid),
+        )
         steps = WARM_STEPS if warm is not None and not same_system else ARNOLDI_STEPS
         if warm is None and not same_system:
             warm, at = _warm_start(coarse, H, n, sigma, w, rng)
@@ -280,6 +302,74 @@ def lattice_exponents(
             short.append(sigma)
         return found_here
 
+    normA, normB = _pencil_norms(hill, avg.sq, avg.sv)
+
+    def track(cid: int) -> list[_Candidate] | None:
+        """The cluster's exponents continued from the previous speed's (None: not possible
+        or not accepted; the cluster is then searched)."""
+        if start is None or same_system or not start.vectors or start.indices.size != nh:
+            return None
+        if not np.array_equal(start.indices, H):
+            return None
+        mine, moved = previous(cid)
+        # a Newton step may go a quarter of the way to the nearest other averaged exponent
+        others = np.ones(lam0.size, dtype=bool)
+        others[clusters[cid]] = False
+        sigma = complex(np.mean(lam0[clusters[cid]]))
+        reach = 0.25 * float(np.min(np.abs(lam0[others] - sigma), initial=np.inf))
+        # only centred representatives standing for this cluster alone (as its search's
+        # would be): a mixed or off-centre one is searched again, which may find a better copy
+        if not mine or any(start.centroid[i] > CENTRED or len(start.related[i]) != 1 for i in mine):
+            return None
+        found: list[_Candidate] = []
+        for i in mine:
+            vec = start.vectors[i]
+            assert vec is not None
+            q1, _ = to_unbalanced(vec)
+            # the exponent moves with its averaged one: by the rate seen last time (the
+            # secant dlambda / dsigma of the previous step), else one to one
+            rate = start.rate[i] if start.rate.size == start.exponents.size else np.nan
+            rate = complex(rate) if np.isfinite(rate) else 1.0
+            lam_t = complex(start.exponents[i] + rate * moved)
+            for _ in range(TRACK_POLISH):
+                lam_t, q1, u, yq = _polish(hill, lam_t, q1, w, step=reach)
+                xb = np.concatenate([q1 * sq_rep, hill.s(lam_t) * q1 * sv_rep])
+                res = float(np.linalg.norm(np.asarray(hill.Q(lam_t) @ q1) / sv_rep))
+                scale = (normA + abs(lam_t) * normB) * float(np.linalg.norm(xb))
+                if not np.isfinite(lam_t) or res <= TRACK_TOL * scale:
+                    break
+            if not (np.isfinite(lam_t) and res <= TRACK_TOL * scale):
+                return None
+            c = candidate(xb, lam_t, -1)
+            if c.centroid > CENTRED or tuple(c.families) != (cid,):
+                return None
+            c.search = cid
+            c.polished = (lam_t, q1, u, yq, res)
+            if moved != 0:
+                c.rate = complex((lam_t - start.exponents[i]) / moved)
+            found.append(c)
+        if _count(_select(found, {cid: quotas[cid]}, w, nh)) < quotas[cid]:
+            return None
+        tracked.append(cid)
+        done[cid] = quotas[cid]
+        return found
+
+    matched: dict[int, tuple[list[int], complex]] = {}
+
+    def previous(cid: int) -> tuple[list[int], complex]:
+        if cid not in matched:
+            matched[cid] = (
+                _previous_rows(start, lam0, clusters[cid], w)
+                if start is not None and not same_system
+                else ([], 0j)
+            )
+        return matched[cid]
+
+    def find(cid: int) -> list[_Candidate]:
+        got = track(cid)
+        return got if got is not None else search(cid)
+
+    tracked: list[int] = []
     short: list[complex] = []
     warm_starts: list[int] = []
     done: dict[int, int] = {}  # clusters whose search met its quota: their quotas
@@ -306,7 +396,7 @@ def lattice_exponents(
                 quotas[cid] = 0
     for cid in range(len(clusters)):
         if cid not in skipped:
-            pool.extend(search(cid))
+            pool.extend(find(cid))
     # a certified cluster may still hold the leading exponent (its disc reaches right of
     # every computed one): search those too, rightmost disc first, so that the largest real
     # part reported is an exponent's, not the best of the rest
@@ -321,12 +411,11 @@ def lattice_exponents(
             break
         skipped.remove(cid)
         quotas[cid] = full[cid]
-        pool.extend(search(cid))
+        pool.extend(find(cid))
 
     expected = int(sum(quotas.values()))
     reps = _select(pool, quotas, w, nh, share=share)
     # left eigenvectors, error bounds and truncation estimates of the representatives
-    normA, normB = _pencil_norms(hill, avg.sq, avg.sv)
     Mb = sp.diags_array(1.0 / sv_rep) @ Mconv @ sp.diags_array(1.0 / sv_rep)
 
     def B_b(xb: np.ndarray) -> np.ndarray:  # the balanced first-order B times xb
@@ -337,6 +426,7 @@ def lattice_exponents(
     vectors: list[np.ndarray | None] = []
     certified: list[bool] = []
     centres: list[complex] = []
+    rates: list[complex] = []
     spread: list[float] = []
     related: list[list[complex]] = []
     radii: list[float] = []
@@ -356,15 +446,21 @@ def lattice_exponents(
                 radius.update(zip(need_r, _gershgorin(system, avg, need_r), strict=True))
             ok = bool(modes.size) and all(lam0[m].real + radius[int(m)] < 0 for m in modes)
         disc = max((radius[int(m)] for m in modes), default=0.0) if unresolved and ok else 0.0
-        xq, _ = to_unbalanced(c.y)
-        lam_c, xq, u, yq = _polish(hill, c.lam, xq, w)
+        if c.polished is not None:  # tracked: polished already, its residual known
+            lam_c, xq, u, yq, res = c.polished
+        else:
+            xq, _ = to_unbalanced(c.y)
+            lam_c, xq, u, yq = _polish(hill, c.lam, xq, w)
+            res = 0.0
         c.lam = lam_c
         # first-order vectors: right (q, s q), left (P^H u, u); balanced: R^-1 x, L^-1 y
         xb = np.concatenate([xq * sq_rep, hill.s(lam_c) * xq * sv_rep])
         yb = np.concatenate([yq / sq_rep, u * sv_rep])
         denom = abs(np.vdot(yb, B_b(xb)))
         nx, ny = np.linalg.norm(xb), np.linalg.norm(yb)
-        bound = _EPS * (normA + abs(lam_c) * normB) * nx * ny / max(denom, np.finfo(float).tiny)
+        # first order in the backward error: rounding's, or a tracked pair's residual
+        err = max(_EPS * (normA + abs(lam_c) * normB) * nx, res)
+        bound = err * ny / max(denom, np.finfo(float).tiny)
         if outer is None:
             tau = 0.0
         elif defer_truncation:
@@ -391,6 +487,7 @@ def lattice_exponents(
             members = clusters[c.home] if c.home >= 0 else np.zeros(0, int)
             mid = complex(np.mean(lam0[members])) if members.size else complex("nan")
             centres.append(mid if lam_i == c.lam else complex(np.conj(mid)))
+            rates.append(c.rate if lam_i == c.lam else complex(np.conj(c.rate)))
             related.append(
                 [complex(np.mean(lam0[clusters[f]])) for f in c.families if f < len(clusters)]
             )
@@ -405,6 +502,7 @@ def lattice_exponents(
         "seconds": time.perf_counter() - t0,
         "short_searches": [complex(x) for x in short],
         "warm_starts": len(warm_starts),
+        "tracked": len(tracked),
         "certified_modes": np.concatenate(
             [lam0[clusters[c]] for c in skipped] + [np.zeros(0, complex)]
         ),
@@ -437,6 +535,7 @@ def lattice_exponents(
         vectors=vectors,
         indices=H,
         modes=avg,
+        rate=np.array(rates, dtype=complex),
     )
     if deferred and outer is not None:
         result.settle = _settler(result, outer, deferred)
@@ -506,10 +605,13 @@ def _warm_start(
     w: float,
     rng: np.random.Generator,
     resolved: bool = False,
+    rows: tuple[list[int], complex] | None = None,
 ) -> tuple[np.ndarray | None, complex]:
     """The coarse eigenvectors of the cluster centred at ``sigma``, moved onto the harmonics
     ``H`` with random weights, one per column, and the mean of their exponents (None: none
-    known)."""
+    known). ``rows``: the rows of ``start`` standing for this cluster and the shift of its
+    averaged exponents since (another system's start, :func:`_previous_rows`); else those
+    whose cluster centre is ``sigma`` (the same system's)."""
     if start is None or not start.vectors:
         return None, sigma
     tol = CLUSTER_TOL * max(abs(sigma), w)
@@ -519,10 +621,15 @@ def _warm_start(
         return None, sigma  # not a sub-lattice
     nh, nc = H.size, Hc.size
     cols = (pos[:, None] * n + np.arange(n)).ravel()
+    if rows is not None:
+        candidates, moved = rows
+    else:
+        candidates = [i for i, z in enumerate(start.centre) if abs(z - sigma) <= tol]
+        moved = 0j
     mine = [
         i
-        for i, (z, v) in enumerate(zip(start.centre, start.vectors, strict=True))
-        if v is not None and abs(z - sigma) <= tol and not (resolved and start.unresolved[i])
+        for i in candidates
+        if start.vectors[i] is not None and not (resolved and start.unresolved[i])
     ]
     if not mine:
         return None, sigma
@@ -532,7 +639,42 @@ def _warm_start(
         c = complex(rng.standard_normal(), rng.standard_normal())
         out[cols, j] = c * v[: n * nc]
         out[n * nh + cols, j] = c * v[n * nc :]
-    return out / np.linalg.norm(out), complex(np.mean(start.exponents[mine]))
+    return out / np.linalg.norm(out), complex(np.mean(start.exponents[mine])) + moved
+
+
+def _previous_rows(
+    start: LatticeExponents, lam0: np.ndarray, members: np.ndarray, w: float
+) -> tuple[list[int], complex]:
+    """The rows of ``start`` (a nearby system's search: the previous speed) standing for the
+    cluster of averaged exponents ``lam0[members]`` (all of them in ``lam0``, conjugates
+    included), and how far the cluster's centre moved since (``([], 0)``: no unambiguous
+    match).
+
+    The previous cluster is the one whose centre is nearest this centre, when it moved by
+    less than ``CLUSTER_TOL`` (relative), or by less than half the distance to any other
+    averaged exponent and less than the previous centre's distance to any of them (no other
+    exponent can have come from there).
+    """
+    have = [i for i, v in enumerate(start.vectors) if v is not None]
+    if not have:
+        return [], 0j
+    sigma = complex(np.mean(lam0[members]))
+    prev = np.unique(start.centre[have])
+    prev = prev[np.isfinite(prev)]
+    if not prev.size:
+        return [], 0j
+    j = int(np.argmin(np.abs(prev - sigma)))
+    zp, d = complex(prev[j]), float(np.abs(prev[j] - sigma))
+    if d > CLUSTER_TOL * max(abs(sigma), w):
+        # every other averaged exponent (the conjugates are among them)
+        others = np.ones(lam0.size, dtype=bool)
+        others[members] = False
+        rest = lam0[others]
+        gap = float(np.min(np.abs(rest - sigma))) if rest.size else np.inf
+        to_prev = float(np.min(np.abs(rest - zp))) if rest.size else np.inf
+        if not (d < 0.5 * gap and d < to_prev):
+            return [], 0j
+    return [i for i in have if start.centre[i] == zp], sigma - zp
 
 
 def _arnoldi(
@@ -653,7 +795,7 @@ def _factor(hill: LatticeHill, sigma: complex, w: float, *, many: bool = False) 
 
 
 def _polish(
-    hill: LatticeHill, lam: complex, q: np.ndarray, w: float
+    hill: LatticeHill, lam: complex, q: np.ndarray, w: float, step: float | None = None
 ) -> tuple[complex, np.ndarray, np.ndarray, np.ndarray]:
     """One LU at the exponent: inverse iteration for the right and left null vectors of
     ``Q(lam)`` and a two-sided Newton (Rayleigh functional) step on ``lam``.
@@ -661,6 +803,9 @@ def _polish(
     (Reusing the search's factor at ``sigma`` instead, with shift-invert steps of the
     first-order pencil, gave the same vectors to 1e-15 but was slower on the gearbox: 5-13
     steps where one LU and three solves do, and the kept factors cost memory.)
+
+    The Newton step is taken when it is below ``step`` (default ``1e-4 max(|lam|, w1)``: a
+    polish of a converged pair; a tracked exponent allows larger ones).
 
     Returns ``(lam, q, u, P(lam)^H u)``.
     """
@@ -674,7 +819,8 @@ def _polish(
     u /= np.linalg.norm(u)
     num = np.vdot(u, hill.Q(lam) @ q1)
     den = np.vdot(u, dQ @ q1)
-    if den != 0 and np.isfinite(num / den) and abs(num / den) < 1e-4 * max(abs(lam), w):
+    limit = 1e-4 * max(abs(lam), w) if step is None else step
+    if den != 0 and np.isfinite(num / den) and abs(num / den) < limit:
         lam = lam - num / den
     P = hill.inner.P(lam, w)
     return complex(lam), q1, u, np.asarray(P.conj().T @ u)

@@ -45,6 +45,10 @@ class _Candidate:
     forced: bool = False  # taken only to fill its cluster (see _fill)
     search: int = -1  # the cluster whose search found it
     home: int = -1  # the cluster it stands for
+    #: ``(lam, q, u, P(lam)^H u, residual)`` when already polished (a tracked exponent)
+    polished: tuple[Any, ...] | None = None
+    #: a tracked exponent's move per move of its averaged exponent (NaN: not tracked)
+    rate: complex = complex("nan")
 
 
 def _clusters(lam0: np.ndarray, targets: np.ndarray, w: float) -> list[np.ndarray]:
