@@ -125,7 +125,8 @@ def confirm_unresolved(
             out.uncertainty[hit] = np.maximum(out.uncertainty[hit], TRUNCATION_SAFETY * abs(a - b))
             confirmed += len(left)
     if fine.settle is not None:  # the truncation estimates of the exponents taken
-        fine.settle(np.flatnonzero(take))
+        fine.settle(fine, np.flatnonzero(take))
+        fine.settle = None  # it holds the finer lattice's operators (and factors)
     for name in fields:
         setattr(out, name, np.concatenate([getattr(out, name)[keep], getattr(fine, name)[take]]))
     out.partner = [p for p, k in zip(out.partner, keep, strict=True) if k] + [

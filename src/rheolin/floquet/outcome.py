@@ -44,8 +44,8 @@ class LatticeExponents:
     indices: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     #: the time-averaged modes (``_Averaged``) the search started from
     modes: Any = field(default=None, repr=False)
-    #: truncation estimates not computed yet (``defer_truncation``): ``rows -> None`` fills
-    #: ``truncation`` and raises ``uncertainty`` on those rows
+    #: truncation estimates not computed yet (``defer_truncation``): ``settle(self, rows)``
+    #: fills ``truncation`` and raises ``uncertainty`` on those rows
     settle: Any = field(default=None, repr=False)
     #: per row, a tracked exponent's move per move of its averaged exponent since the
     #: previous call (NaN: not tracked); the next call's prediction

@@ -451,7 +451,9 @@ def lattice_exponents(
         else:
             xq, _ = to_unbalanced(c.y)
             lam_c, xq, u, yq = _polish(hill, c.lam, xq, w)
-            res = 0.0
+            # the pair's own residual enters its bound (a Ritz pair accepted wrongly then
+            # gets a wide tolerance, never a confident verdict)
+            res = float(np.linalg.norm(np.asarray(hill.Q(lam_c) @ xq) / sv_rep))
         c.lam = lam_c
         # first-order vectors: right (q, s q), left (P^H u, u); balanced: R^-1 x, L^-1 y
         xb = np.concatenate([xq * sq_rep, hill.s(lam_c) * xq * sv_rep])
@@ -538,20 +540,19 @@ def lattice_exponents(
         rate=np.array(rates, dtype=complex),
     )
     if deferred and outer is not None:
-        result.settle = _settler(result, outer, deferred)
+        result.settle = _settler(outer, deferred)
     return result
 
 
-def _settler(
-    out: LatticeExponents,
-    outer: _Outer,
-    deferred: list[tuple[int, complex, np.ndarray, np.ndarray]],
-) -> Any:
-    """``rows -> None``: the truncation estimates of those rows (a representative's row and
-    its conjugate's share one), computed once each."""
+def _settler(outer: _Outer, deferred: list[tuple[int, complex, np.ndarray, np.ndarray]]) -> Any:
+    """``(out, rows) -> None``: the truncation estimates of those rows of ``out`` (a
+    representative's row and its conjugate's share one), computed once each. (The result is
+    an argument, not captured: a result holding a closure over itself is a reference cycle,
+    which kept the finer lattices' operators and PARDISO factors alive until a full garbage
+    collection: 2 GB per worker over a run-up.)"""
     first = np.array([d[0] for d in deferred], dtype=int)
 
-    def settle(rows: np.ndarray) -> None:
+    def settle(out: LatticeExponents, rows: np.ndarray) -> None:
         for row in np.asarray(rows, dtype=int):
             if not np.isnan(out.truncation[row]):
                 continue
@@ -710,7 +711,10 @@ def _arnoldi(
             V[j + 1] = wv / beta
         if m in checkpoints or ended or m == m_max:
             theta, Svec = np.linalg.eig(Hm[:m, :m])
-            res = beta * np.abs(Svec[-1, :]) if not ended else np.zeros(m)
+            # the residual of each Ritz pair, also at a breakdown: "ended" is relative to the
+            # largest Ritz value, and a shift on an exponent (a tracked start) makes that one
+            # huge while the far pairs are not converged at all
+            res = beta * np.abs(Svec[-1, :])
             good = res <= tol * np.abs(theta)
             if good.any():
                 vecs = V[:m].T @ Svec[:, good]
