@@ -26,12 +26,13 @@ def test_arnoldi_accepts_only_converged_ritz_pairs_at_a_breakdown() -> None:
         v0 = sum(wk * V[:, k] for k, wk in enumerate(weights))
         v0 = v0 + 1e-3 * (rng.standard_normal(n) + 1j * rng.standard_normal(n))
         accepted: list[tuple[np.ndarray, np.ndarray]] = []
-
-        def accept(theta: np.ndarray, vecs: np.ndarray) -> bool:
-            accepted.append((theta, vecs))
-            return False
-
-        se._arnoldi(apply, v0, accept, steps=(2, 3, 4, 6, 10), tol=1e-10)
+        se._arnoldi(
+            apply,
+            v0,
+            lambda theta, vecs, got=accepted: got.append((theta, vecs)) is not None,
+            steps=(2, 3, 4, 6, 10),
+            tol=1e-10,
+        )
         assert accepted
         for theta, vecs in accepted:
             for t, v in zip(theta, vecs.T, strict=True):
