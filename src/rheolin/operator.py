@@ -101,6 +101,30 @@ class _Block:
         return out
 
 
+class _Patterns:
+    """A few recent support-matrix patterns (a sweep reuses one at every speed)."""
+
+    def __init__(self, size: int = 4) -> None:
+        self.size = size
+        self._kept: dict[Any, Any] = {}
+
+    def get(self, key: Any) -> Any:
+        got = self._kept.pop(key, None)
+        if got is not None:
+            self._kept[key] = got  # most recent last
+        return got
+
+    def put(self, key: Any, value: Any) -> None:
+        self._kept.pop(key, None)
+        self._kept[key] = value
+        while len(self._kept) > self.size:
+            self._kept.pop(next(iter(self._kept)))
+
+
+#: Patterns of :meth:`HarmonicBalance._support_matrices`, by harmonics and block patterns.
+_SUPPORT_PATTERNS = _Patterns()
+
+
 def coefficient_blocks(system: PeriodicSystem) -> dict[int, _Block]:
     """The :class:`_Block` of every coefficient harmonic of ``system`` (0 first), built once
     per system and kept on it (the solve, the stability check and its memory estimate all use
@@ -240,32 +264,63 @@ class HarmonicBalance:
     def _support_matrices(
         self, rows: np.ndarray, cols: np.ndarray
     ) -> tuple[sp.csr_array, sp.csr_array]:
-        """``dA`` restricted to ``rows x cols`` as sparse matrices over (harmonic, DOF) pairs."""
+        """``dA`` restricted to ``rows x cols`` as sparse matrices over (harmonic, DOF) pairs.
+
+        Their pattern depends on the harmonics and the blocks' patterns only: it is built once
+        and kept (:data:`_SUPPORT_PATTERNS`) for the next speeds of a sweep, which only
+        compute the values."""
+        key = self._support_key(rows, cols)
+        pattern = _SUPPORT_PATTERNS.get(key)
         nr, nc = rows.size, cols.size
-        parts: dict[bool, tuple[list, list, list]] = {False: ([], [], []), True: ([], [], [])}
+        shape = (self.pos.size * nr, self.pos.size * nc)
+        values: dict[bool, list[np.ndarray]] = {False: [], True: []}
+        index: dict[bool, tuple[list, list]] = {False: ([], []), True: ([], [])}
         for block, hrows, src, neg, s in self._coupling:
-            br, bc, _ = block.entries()
-            r = hrows[:, None] * nr + np.searchsorted(rows, br)[None, :]
-            c = src[:, None] * nc + np.searchsorted(cols, bc)[None, :]
             vals = block.values(s)
+            if pattern is None:
+                br, bc, _ = block.entries()
+                r = hrows[:, None] * nr + np.searchsorted(rows, br)[None, :]
+                c = src[:, None] * nc + np.searchsorted(cols, bc)[None, :]
             for flag in (False, True):
                 pick = neg == flag
                 if pick.any():
-                    parts[flag][0].append(r[pick].ravel())
-                    parts[flag][1].append(c[pick].ravel())
-                    parts[flag][2].append(vals[pick].ravel())
-        shape = (self.pos.size * nr, self.pos.size * nc)
+                    values[flag].append(vals[pick].ravel())
+                    if pattern is None:
+                        index[flag][0].append(r[pick].ravel())
+                        index[flag][1].append(c[pick].ravel())
+        if pattern is None:
+            pattern = {}
+            for flag in (False, True):
+                r_list, c_list = index[flag]
+                if not r_list:
+                    pattern[flag] = None
+                    continue
+                r, c = np.concatenate(r_list), np.concatenate(c_list)
+                order = np.lexsort((c, r))  # CSR order (duplicates kept: they add up)
+                indptr = np.zeros(shape[0] + 1, dtype=np.int64)
+                np.cumsum(np.bincount(r, minlength=shape[0]), out=indptr[1:])
+                pattern[flag] = (order, c[order].astype(np.int64), indptr)
+            _SUPPORT_PATTERNS.put(key, pattern)
 
         def build(flag: bool) -> sp.csr_array:
-            r, c, v = parts[flag]
-            if not r:
+            got = pattern[flag]
+            if got is None:
                 return sp.csr_array(shape, dtype=complex)
-            coo = sp.coo_array(
-                (np.concatenate(v), (np.concatenate(r), np.concatenate(c))), shape=shape
-            )
-            return sp.csr_array(coo)
+            order, indices, indptr = got
+            data = np.concatenate(values[flag])[order]
+            return sp.csr_array((data, indices, indptr), shape=shape)
 
         return build(False), build(True)
+
+    def _support_key(self, rows: np.ndarray, cols: np.ndarray) -> tuple[Any, ...]:
+        """What the support matrices' pattern depends on."""
+        parts: list[Any] = [self.pos.tobytes(), self.full.tobytes(), rows.tobytes(), cols.tobytes()]
+        for k, block in self._blocks.items():
+            if k == 0:
+                continue
+            br, bc, _ = block.entries()
+            parts.append((k, br.tobytes(), bc.tobytes()))
+        return tuple(parts)
 
     def wide_harmonics(self, limit: int) -> list[int]:
         """Coefficient harmonics ``k != 0`` whose block touches more than ``limit`` DOFs (an

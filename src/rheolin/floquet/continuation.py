@@ -2,15 +2,17 @@
 
 Over a fine speed grid the Floquet exponents and their eigenvectors move little from one speed
 to the next. A :class:`Continuation` passed to :func:`rheolin.floquet` keeps the lattice
-eigenvectors of each call (one set per lattice order, the finer lattices' confirmations
-included); the next call's searches start from them, as a finer lattice's searches start from
-a coarser one's (docs/stability.md). A confirmation starts only from the previous speed's
-resolved exponents (an unresolved one's continuation is unresolved again, where a search from
-this speed's coarse vectors may find a centred copy). Only the
-starting vectors change: every cluster is still searched until its own test is met, so the
-verdict and its checks are those of a call without one. A cluster whose time-averaged
-exponents moved by more than ``CLUSTER_TOL`` starts cold, and so does every search after a
-change of model size.
+exponents and eigenvectors of each call (one set per lattice order, the finer lattices'
+confirmations included). The next call matches its clusters of time-averaged exponents to the
+previous ones and *tracks* each matched cluster's exponents: moved by the cluster's averaged
+shift and polished there (an LU and three solves, no Arnoldi run). They are kept only when
+they pass the tests a search's exponents pass (converged to a backward error of 1e-10, which
+enters their bounds; centred; standing for their own cluster; meeting its quota as distinct
+exponents); any other cluster is searched, starting from the previous eigenvectors (a
+confirmation's cluster unresolved at the previous speed from this speed's coarse vectors:
+an unresolved exponent's continuation is unresolved again). The checks of the verdict are
+those of a call without one (docs/stability.md, section 5). An unmatched cluster starts cold,
+and so does everything after a change of model size.
 
 >>> import numpy as np, rheolin as rl
 >>> from rheolin.floquet import Continuation
@@ -21,8 +23,8 @@ change of model size.
 >>> a = rl.floquet(mathieu(1.3), method="lattice", order=4, continuation=cont)
 >>> b = rl.floquet(mathieu(1.31), method="lattice", order=4, continuation=cont)
 >>> c = rl.floquet(mathieu(1.31), method="lattice", order=4)
->>> b.info["warm_starts"] > 0, bool(abs(b.max_real - c.max_real) < 1e-9)
-(True, True)
+>>> b.info["tracked"], b.info["shifts"], bool(abs(b.max_real - c.max_real) < 1e-9)
+(1, 0, True)
 """
 
 from __future__ import annotations

@@ -224,7 +224,7 @@ def lattice_exponents(
             sigma = at  # where the coarse exponents are: their continuations converge first
             warm_starts.append(cid)
         t1 = time.perf_counter()
-        lu = _factor(hill, sigma, w, many=warm is None)
+        lu = _factor(hill, sigma, w, many=steps is ARNOLDI_STEPS)
         sigma = lu.sigma
         lu_seconds += time.perf_counter() - t1
         P = hill.inner.P(sigma, w)
