@@ -17,10 +17,15 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .operator import _Block, coefficient_blocks
+from .operator import _Block, _Patterns, coefficient_blocks
 from .system import PeriodicSystem
 
 __all__ = ["LatticeHill"]
+
+
+#: Entry patterns of :class:`_Coupling`, by harmonics and block patterns (a sweep's speeds share
+#: them).
+_PATTERNS = _Patterns(8)
 
 
 class _Coupling:
@@ -38,7 +43,52 @@ class _Coupling:
         n: int,
         skip_zero: bool = False,
     ) -> None:
-        rows, cols, hs, vals = [], [], [], []
+        key = (
+            row_h.tobytes(),
+            col_h.tobytes(),
+            n,
+            skip_zero,
+            tuple(
+                (k, b.entries()[0].tobytes(), b.entries()[1].tobytes()) for k, b in blocks.items()
+            ),
+        )
+        vals: list[np.ndarray] = []
+        for k, block in blocks.items():
+            if skip_zero and k == 0:
+                continue
+            target = col_h + k
+            pos = np.minimum(np.searchsorted(row_h, target), row_h.size - 1)
+            j = np.flatnonzero(row_h[pos] == target)
+            if j.size:
+                vals.append(np.tile(block.entries()[2], (1, j.size)))
+        self.shape = (row_h.size * n, col_h.size * n)
+        if not vals:
+            self.rows = self.cols = np.zeros(0, dtype=np.int64)
+            self.col_h = np.zeros(0)
+            self.K = self.D = self.M = np.zeros(0, dtype=complex)
+            self.indptr = np.zeros(self.shape[1] + 1, dtype=np.int64)
+            return
+        # the pattern depends on the harmonics and the blocks' patterns only: a sweep's
+        # next speed reuses it (the sort is most of the cost) and gathers its values
+        pattern = _PATTERNS.get(key)
+        if pattern is None:
+            pattern = self._pattern(blocks, row_h, col_h, n, skip_zero)
+            _PATTERNS.put(key, pattern)
+        self.rows, self.cols, self.col_h, self.indptr, order = pattern
+        v = np.concatenate(vals, axis=1)[:, order]
+        self.K, self.D, self.M = v[0], v[1], v[2]
+
+    def _pattern(
+        self,
+        blocks: dict[int, _Block],
+        row_h: np.ndarray,
+        col_h: np.ndarray,
+        n: int,
+        skip_zero: bool,
+    ) -> tuple[np.ndarray, ...]:
+        """``(rows, cols, col_h, indptr, order)``: CSC order of the entries, which are
+        listed block by block (``order`` sorts the values listed so)."""
+        rows, cols, hs = [], [], []
         for k, block in blocks.items():
             if skip_zero and k == 0:
                 continue
@@ -51,25 +101,18 @@ class _Coupling:
                 continue
             j = np.flatnonzero(ok)
             i = pos[ok]
-            br, bc, bv = block.entries()
+            br, bc, _ = block.entries()
             rows.append((i[:, None] * n + br[None, :]).ravel())
             cols.append((j[:, None] * n + bc[None, :]).ravel())
             hs.append(np.repeat(col_h[j], br.size))
-            vals.append(np.tile(bv, (1, j.size)))
-        self.shape = (row_h.size * n, col_h.size * n)
-        if not rows:
-            self.rows = self.cols = np.zeros(0, dtype=np.int64)
-            self.col_h = np.zeros(0)
-            self.K = self.D = self.M = np.zeros(0, dtype=complex)
-            self.indptr = np.zeros(self.shape[1] + 1, dtype=np.int64)
-            return
         r, c = np.concatenate(rows), np.concatenate(cols)
         order = np.lexsort((r, c))
-        self.rows, self.cols = r[order].astype(np.int64), c[order].astype(np.int64)
-        self.col_h = np.concatenate(hs)[order].astype(float)
-        v = np.concatenate(vals, axis=1)[:, order]
-        self.K, self.D, self.M = v[0], v[1], v[2]
-        self.indptr = np.searchsorted(self.cols, np.arange(self.shape[1] + 1)).astype(np.int64)
+        rr, cc = r[order].astype(np.int64), c[order].astype(np.int64)
+        ch = np.concatenate(hs)[order].astype(float)
+        indptr = np.searchsorted(cc, np.arange(self.shape[1] + 1)).astype(np.int64)
+        for arr in (rr, cc, ch, indptr, order):
+            arr.setflags(write=False)
+        return rr, cc, ch, indptr, order
 
     @property
     def nnz(self) -> int:

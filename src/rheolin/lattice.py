@@ -144,13 +144,6 @@ def lattice_size_bound(costs: Sequence[int], order: int) -> int:
     return int(sum(poly))
 
 
-def _norm1(x: Any) -> float:
-    if x is None:
-        return 0.0
-    a = abs(sp.csr_array(x)) if sp.issparse(x) else sp.csr_array(np.abs(np.asarray(x)))
-    return float(a.sum(axis=0).max()) if a.nnz else 0.0
-
-
 def coupling_strengths(system: Any) -> dict[int, float]:
     """Strength of each positive coefficient harmonic ``k``, in the balanced Hill pencil.
 
@@ -161,19 +154,31 @@ def coupling_strengths(system: Any) -> dict[int, float]:
     from .hill import state_scaling
 
     sq, sv = state_scaling(system)
-    Tq, Tv = sp.diags_array(1.0 / sq), sp.diags_array(1.0 / sv)
+    iq, iv = 1.0 / sq, 1.0 / sv
     w_ref = float(np.median(sq / sv))
     out: dict[int, float] = {}
     for k in system.coefficient_harmonics:
         if k <= 0:
             continue
 
-        def part(table: dict, right: Any, k: int = k) -> float:
+        def part(table: dict, right: np.ndarray, k: int = k) -> float:
             x = table.get(k)
-            return 0.0 if x is None else _norm1(Tv @ sp.csr_array(x) @ right)
+            return 0.0 if x is None else _scaled_norm1(x, iv, right)
 
-        out[int(k)] = part(system.K, Tq) + part(system.D, Tv) + w_ref * part(system.M, Tv)
+        out[int(k)] = part(system.K, iq) + part(system.D, iv) + w_ref * part(system.M, iv)
     return out
+
+
+def _scaled_norm1(x: Any, left: np.ndarray, right: np.ndarray) -> float:
+    """``||diag(left) x diag(right)||_1`` (largest column sum), from the entries."""
+    if sp.issparse(x):
+        coo = sp.coo_array(x)
+        if not coo.nnz:
+            return 0.0
+        weights = np.abs(coo.data) * left[coo.row] * right[coo.col]
+        return float(np.bincount(coo.col, weights, minlength=coo.shape[1]).max())
+    a = np.abs(np.asarray(x)) * left[:, None] * right[None, :]
+    return float(a.sum(axis=0).max()) if a.size else 0.0
 
 
 def coupling_costs(system: Any) -> dict[int, int]:
