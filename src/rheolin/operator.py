@@ -102,23 +102,39 @@ class _Block:
 
 
 class _Patterns:
-    """A few recent support-matrix patterns (a sweep reuses one at every speed)."""
+    """A few recent entry patterns (a sweep reuses one at every speed), at most ``size`` of
+    them and ``limit`` bytes in all (a larger one is not kept)."""
 
-    def __init__(self, size: int = 4) -> None:
-        self.size = size
-        self._kept: dict[Any, Any] = {}
+    def __init__(self, size: int = 4, limit: int = 256 * 2**20) -> None:
+        self.size, self.limit = size, limit
+        self._kept: dict[Any, tuple[Any, int]] = {}
 
     def get(self, key: Any) -> Any:
         got = self._kept.pop(key, None)
-        if got is not None:
-            self._kept[key] = got  # most recent last
-        return got
+        if got is None:
+            return None
+        self._kept[key] = got  # most recent last
+        return got[0]
 
     def put(self, key: Any, value: Any) -> None:
+        nbytes = _nbytes(value)
         self._kept.pop(key, None)
-        self._kept[key] = value
-        while len(self._kept) > self.size:
+        if nbytes > self.limit:
+            return
+        self._kept[key] = (value, nbytes)
+        while len(self._kept) > self.size or sum(b for _, b in self._kept.values()) > self.limit:
             self._kept.pop(next(iter(self._kept)))
+
+
+def _nbytes(value: Any) -> int:
+    """Bytes of the arrays in a (nested) tuple or dict."""
+    if isinstance(value, np.ndarray):
+        return int(value.nbytes)
+    if isinstance(value, dict):
+        return sum(_nbytes(v) for v in value.values())
+    if isinstance(value, (tuple, list)):
+        return sum(_nbytes(v) for v in value)
+    return 0
 
 
 #: Patterns of :meth:`HarmonicBalance._support_matrices`, by harmonics and block patterns.
