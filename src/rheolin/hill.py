@@ -23,6 +23,21 @@ def _dense(x: Any) -> np.ndarray:
     return x.toarray() if sp.issparse(x) else np.asarray(x)
 
 
+def scaled_entries(x: Any, left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The nonzero entries ``(rows, cols, values)`` of ``diag(left) x diag(right)`` (``x``
+    dense or sparse)."""
+    if sp.issparse(x):
+        coo = sp.coo_array(x)
+        r, c, v = coo.row, coo.col, coo.data
+    else:
+        x = np.asarray(x)
+        r, c = np.nonzero(x)
+        v = x[r, c]
+    keep = v != 0
+    r, c = r[keep].astype(np.int64), c[keep].astype(np.int64)
+    return r, c, v[keep] * left[r] * right[c]
+
+
 def _diag(x: Any, n: int) -> np.ndarray:
     if x is None:
         return np.zeros(n)

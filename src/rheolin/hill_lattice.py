@@ -48,9 +48,7 @@ class _Coupling:
             col_h.tobytes(),
             n,
             skip_zero,
-            tuple(
-                (k, b.entries()[0].tobytes(), b.entries()[1].tobytes()) for k, b in blocks.items()
-            ),
+            tuple((k, b.pattern_key) for k, b in blocks.items()),
         )
         vals: list[np.ndarray] = []
         for k, block in blocks.items():

@@ -25,7 +25,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from .harmonics import HarmonicSet
 
@@ -171,14 +170,10 @@ def coupling_strengths(system: Any) -> dict[int, float]:
 
 def _scaled_norm1(x: Any, left: np.ndarray, right: np.ndarray) -> float:
     """``||diag(left) x diag(right)||_1`` (largest column sum), from the entries."""
-    if sp.issparse(x):
-        coo = sp.coo_array(x)
-        if not coo.nnz:
-            return 0.0
-        weights = np.abs(coo.data) * left[coo.row] * right[coo.col]
-        return float(np.bincount(coo.col, weights, minlength=coo.shape[1]).max())
-    a = np.abs(np.asarray(x)) * left[:, None] * right[None, :]
-    return float(a.sum(axis=0).max()) if a.size else 0.0
+    from .hill import scaled_entries
+
+    _, c, v = scaled_entries(x, left, right)
+    return float(np.bincount(c, np.abs(v), minlength=np.shape(x)[1]).max()) if v.size else 0.0
 
 
 def coupling_costs(system: Any) -> dict[int, int]:

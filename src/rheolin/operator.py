@@ -61,6 +61,16 @@ class _Block:
         self.M, self.D, self.K = compress(M), compress(D), compress(K)
         self.n = n
         self._entries: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._pattern_key: bytes | None = None
+
+    @property
+    def pattern_key(self) -> bytes:
+        """The union pattern of :meth:`entries` as bytes (a cache key for the patterns of
+        operators assembled from this block; values change with the speed, this does not)."""
+        if self._pattern_key is None:
+            rows, cols, _ = self.entries()
+            self._pattern_key = rows.tobytes() + b"|" + cols.tobytes()
+        return self._pattern_key
 
     def entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The union pattern of ``K, D, M`` in global DOF indices, sorted by (column, row)
@@ -331,11 +341,7 @@ class HarmonicBalance:
     def _support_key(self, rows: np.ndarray, cols: np.ndarray) -> tuple[Any, ...]:
         """What the support matrices' pattern depends on."""
         parts: list[Any] = [self.pos.tobytes(), self.full.tobytes(), rows.tobytes(), cols.tobytes()]
-        for k, block in self._blocks.items():
-            if k == 0:
-                continue
-            br, bc, _ = block.entries()
-            parts.append((k, br.tobytes(), bc.tobytes()))
+        parts.extend((k, b.pattern_key) for k, b in self._blocks.items() if k != 0)
         return tuple(parts)
 
     def wide_harmonics(self, limit: int) -> list[int]:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
-from ..hill import state_scaling
+from ..hill import _dense, state_scaling
 from ..lattice import Lattice
 from ..operator import coefficient_blocks
 from ..system import PeriodicSystem
@@ -83,10 +83,7 @@ def _averaged_pencil(
 
     def dense(table: dict, right: np.ndarray) -> np.ndarray:
         x = table.get(0)
-        if x is None:
-            return np.zeros((n, n))
-        x = x.toarray() if hasattr(x, "toarray") else np.asarray(x)
-        return np.asarray(x) / sv[:, None] / right[None, :]
+        return np.zeros((n, n)) if x is None else _dense(x) / sv[:, None] / right[None, :]
 
     Ks, Ds, Ms = dense(system.K, sq), dense(system.D, sv), dense(system.M, sv)
     # real coefficients (the usual case): a real eigenproblem, whose complex exponents come

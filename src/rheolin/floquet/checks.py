@@ -10,6 +10,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..hill import _dense, scaled_entries
 from ..hill_lattice import LatticeHill
 from ..system import PeriodicSystem
 from .averaged import MAX_AVERAGED_DENSE, _Averaged
@@ -104,29 +105,11 @@ def _coupling_terms(system: PeriodicSystem, avg: _Averaged) -> list[tuple[Any, .
     terms = []
     for k in system.coefficient_harmonics:
         mats = [
-            _scaled(system.K.get(k), iv, iq),
-            _scaled(system.D.get(k), iv, iv),
-            _scaled(system.M.get(k), iv, iv),
+            None if x is None else scaled_entries(x, iv, right)
+            for x, right in ((system.K.get(k), iq), (system.D.get(k), iv), (system.M.get(k), iv))
         ]
         terms.append((k, *_compact(mats)))
     return terms
-
-
-def _scaled(x: Any, left: np.ndarray, right: np.ndarray) -> Any:
-    """The nonzero entries ``(rows, cols, values)`` of ``diag(left) x diag(right)`` (None:
-    no such coefficient)."""
-    if x is None:
-        return None
-    if sp.issparse(x):
-        coo = sp.coo_array(x)
-        r, c, v = coo.row, coo.col, coo.data
-    else:
-        x = np.asarray(x)
-        r, c = np.nonzero(x)
-        v = x[r, c]
-    keep = v != 0
-    r, c = r[keep].astype(np.int64), c[keep].astype(np.int64)
-    return r, c, v[keep] * left[r] * right[c]
 
 
 def _radii(
@@ -158,8 +141,8 @@ def _radii(
 
 def _compact(mats: list[Any]) -> tuple[Any, ...]:
     """``(rows, q columns, v columns, K, D, M)``: the coupling matrices (entries from
-    :func:`_scaled`, None where absent) as dense blocks on their nonzero rows and columns (K
-    on the q columns, D and M on the v columns)."""
+    :func:`rheolin.hill.scaled_entries`, None where absent) as dense blocks on their nonzero
+    rows and columns (K on the q columns, D and M on the v columns)."""
     none = np.zeros(0, dtype=np.int64)
     K, D, M = mats
     rows = np.unique(np.concatenate([a[0] for a in mats if a is not None] + [none]))
@@ -213,9 +196,7 @@ def liouville_sum(system: PeriodicSystem) -> tuple[float, float]:
     if M0 is None or n > MAX_AVERAGED_DENSE // 2:
         return float("nan"), float("inf")
 
-    def dense(x: Any) -> np.ndarray:
-        return x.toarray() if hasattr(x, "toarray") else np.asarray(x)
-
+    dense = _dense
     try:
         Minv = np.linalg.inv(dense(M0))
     except np.linalg.LinAlgError:

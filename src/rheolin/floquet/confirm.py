@@ -55,18 +55,15 @@ def confirm_unresolved(
     if centres.size == 0:
         out.info["confirmed"] = {"order": finer.order, "clusters": 0, "replaced": 0, "confirmed": 0}
         return out, None
-    if previous is not None:
-        fine = lattice_exponents(
-            system,
-            finer,
-            near=centres,
-            start=previous,
-            same_system=False,
-            coarse=out,
-            defer_truncation=True,
-        )
-    else:
-        fine = lattice_exponents(system, finer, near=centres, start=out, defer_truncation=True)
+    fine = lattice_exponents(
+        system,
+        finer,
+        near=centres,
+        start=out if previous is None else previous,
+        same_system=previous is None,
+        coarse=None if previous is None else out,
+        defer_truncation=True,
+    )
     fields = (
         "exponents", "bounds", "truncation", "edge", "centroid", "dominant", "certified",
         "centre", "unresolved", "order", "uncertainty", "radius", "rate",

@@ -304,23 +304,29 @@ def lattice_exponents(
 
     normA, normB = _pencil_norms(hill, avg.sq, avg.sv)
 
+    def first_order(q: np.ndarray, lam: complex) -> np.ndarray:
+        """The balanced first-order right vector ``(q, s q)`` of ``q``."""
+        return np.concatenate([q * sq_rep, hill.s(lam) * q * sv_rep])
+
+    def residual(q: np.ndarray, lam: complex) -> float:
+        """``||Q(lam) q||`` on the balanced rows (the first-order pencil's residual)."""
+        return float(np.linalg.norm(np.asarray(hill.Q(lam) @ q) / sv_rep))
+
     def track(cid: int) -> list[_Candidate] | None:
         """The cluster's exponents continued from the previous speed's (None: not possible
         or not accepted; the cluster is then searched)."""
-        if start is None or same_system or not start.vectors or start.indices.size != nh:
-            return None
-        if not np.array_equal(start.indices, H):
+        if start is None or same_system or not np.array_equal(start.indices, H):
             return None
         mine, moved = previous(cid)
+        # only centred representatives standing for this cluster alone (as its search's
+        # would be): a mixed or off-centre one is searched again, which may find a better copy
+        if not mine or any(start.centroid[i] > CENTRED or len(start.related[i]) != 1 for i in mine):
+            return None
         # a Newton step may go a quarter of the way to the nearest other averaged exponent
         others = np.ones(lam0.size, dtype=bool)
         others[clusters[cid]] = False
         sigma = complex(np.mean(lam0[clusters[cid]]))
         reach = 0.25 * float(np.min(np.abs(lam0[others] - sigma), initial=np.inf))
-        # only centred representatives standing for this cluster alone (as its search's
-        # would be): a mixed or off-centre one is searched again, which may find a better copy
-        if not mine or any(start.centroid[i] > CENTRED or len(start.related[i]) != 1 for i in mine):
-            return None
         found: list[_Candidate] = []
         for i in mine:
             vec = start.vectors[i]
@@ -333,8 +339,8 @@ def lattice_exponents(
             lam_t = complex(start.exponents[i] + rate * moved)
             for _ in range(TRACK_POLISH):
                 lam_t, q1, u, yq = _polish(hill, lam_t, q1, w, step=reach)
-                xb = np.concatenate([q1 * sq_rep, hill.s(lam_t) * q1 * sv_rep])
-                res = float(np.linalg.norm(np.asarray(hill.Q(lam_t) @ q1) / sv_rep))
+                xb = first_order(q1, lam_t)
+                res = residual(q1, lam_t)
                 scale = (normA + abs(lam_t) * normB) * float(np.linalg.norm(xb))
                 if not np.isfinite(lam_t) or res <= TRACK_TOL * scale:
                     break
@@ -453,10 +459,10 @@ def lattice_exponents(
             lam_c, xq, u, yq = _polish(hill, c.lam, xq, w)
             # the pair's own residual enters its bound (a Ritz pair accepted wrongly then
             # gets a wide tolerance, never a confident verdict)
-            res = float(np.linalg.norm(np.asarray(hill.Q(lam_c) @ xq) / sv_rep))
+            res = residual(xq, lam_c)
         c.lam = lam_c
         # first-order vectors: right (q, s q), left (P^H u, u); balanced: R^-1 x, L^-1 y
-        xb = np.concatenate([xq * sq_rep, hill.s(lam_c) * xq * sv_rep])
+        xb = first_order(xq, lam_c)
         yb = np.concatenate([yq / sq_rep, u * sv_rep])
         denom = abs(np.vdot(yb, B_b(xb)))
         nx, ny = np.linalg.norm(xb), np.linalg.norm(yb)
