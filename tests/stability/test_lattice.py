@@ -555,3 +555,30 @@ def test_tracked_exponents_against_the_monodromy_matrix() -> None:
             assert abs(res.max_real - ref) <= res.info["uncertainty"][lead] + 1e-9, (a, z)
             tracked += int(res.info["tracked"] > 0)
     assert tracked >= 25
+
+
+def test_off_centre_exponents_tracked_into_a_band() -> None:
+    """Strong parametric excitation (q = 2) puts Mathieu's exponent off centre: its energy
+    moves from harmonic 0 towards harmonic 1 as ``a`` rises to the second instability band
+    (centroid 0.6 -> 1). The off-centre exponent is tracked while it stays the same copy
+    (its centroid and real part move slowly), then searched as the copies change places at
+    the band's edge. Every verdict and largest real part against the monodromy matrix."""
+    from test_floquet_robust import _monodromy_stable
+
+    from rheolin.floquet import Continuation
+    from rheolin.floquet.select import CENTRED
+
+    cont = Continuation()
+    off_centre_tracked = searched_unstable = 0
+    for a in np.linspace(3.5, 3.72, 45):
+        s = mathieu(a, 2.0, 0.02)
+        res = rl.floquet(s, method="lattice", order=6, continuation=cont)
+        ref = monodromy_max_real(s)
+        assert res.decided and res.stable == _monodromy_stable(a, 2.0, 0.02), a
+        lead = int(np.argmax(res.exponents.real))
+        assert abs(res.max_real - ref) <= res.info["uncertainty"][lead] + 1e-9, a
+        if res.info["tracked"] and res.info["centroid"][lead] > CENTRED:
+            off_centre_tracked += 1
+        searched_unstable += int(not res.stable and not res.info["tracked"])
+    assert off_centre_tracked >= 20
+    assert searched_unstable >= 5

@@ -58,15 +58,26 @@ WARM_STEPS = (4, *ARNOLDI_STEPS)
 #: Tracking (a search continued from the previous speed on the same lattice): each of a
 #: cluster's previous representatives is moved by its cluster's averaged shift and polished
 #: there (one LU, three solves: no Arnoldi run). Accepted when every one converges to a
-#: backward error below this (relative, of the balanced first-order pencil), is centred and
-#: stands for its cluster only, and together they meet the cluster's quota as distinct
-#: exponents (the test a search meets); otherwise the cluster is searched.
+#: backward error below this (relative, of the balanced first-order pencil), is centred (or
+#: the same off-centre copy as before: :data:`TRACK_DRIFT`) and stands for its cluster only,
+#: and together they meet the cluster's quota as distinct exponents (the test a search
+#: meets); otherwise the cluster is searched.
 TRACK_TOL = 1e-10
 
 #: Polish steps (an LU each) a tracked exponent may take to meet :data:`TRACK_TOL` (the
 #: averaged shift predicts the gearbox's exponents to 0.1-4 rad/s from one speed to the next:
 #: one step leaves a backward error of 1e-10 to 1e-9 on some).
 TRACK_POLISH = 2
+
+#: An off-centre representative (centroid above :data:`~rheolin.floquet.select.CENTRED`: its
+#: energy split between harmonic 0 and its neighbours, a mode coupled strongly through the
+#: time variation) is tracked as well when it stays the same copy of the same exponent: its
+#: centroid moves by at most ``TRACK_DRIFT`` and its real part by at most ``TRACK_DRIFT`` of
+#: its distance from the axis (a copy changing places, or a resonance setting in, moves them
+#: faster; the cluster is then searched). Copies of one exponent share its real part, so the
+#: copy kept does not change the verdict; its truncation is judged as a search's would be
+#: (unresolved: by the discs or a finer lattice).
+TRACK_DRIFT = 0.05
 
 #: Classical Gram-Schmidt is repeated when it cancels more than this fraction of the vector
 #: (Daniel, Gragg, Kaufman and Stewart's criterion, 1/sqrt(2)): orthogonal to working
@@ -318,9 +329,9 @@ def lattice_exponents(
         if start is None or same_system or not np.array_equal(start.indices, H):
             return None
         mine, moved = previous(cid)
-        # only centred representatives standing for this cluster alone (as its search's
-        # would be): a mixed or off-centre one is searched again, which may find a better copy
-        if not mine or any(start.centroid[i] > CENTRED or len(start.related[i]) != 1 for i in mine):
+        # only representatives standing for this cluster alone (as its search's would be): a
+        # mixed one is searched again
+        if not mine or any(len(start.related[i]) != 1 for i in mine):
             return None
         # a Newton step may go a quarter of the way to the nearest other averaged exponent
         others = np.ones(lam0.size, dtype=bool)
@@ -347,8 +358,14 @@ def lattice_exponents(
             if not (np.isfinite(lam_t) and res <= TRACK_TOL * scale):
                 return None
             c = candidate(xb, lam_t, -1)
-            if c.centroid > CENTRED or tuple(c.families) != (cid,):
+            if tuple(c.families) != (cid,):
                 return None
+            was, before = float(start.centroid[i]), complex(start.exponents[i])
+            if (was > CENTRED or c.centroid > CENTRED) and not (
+                abs(c.centroid - was) <= TRACK_DRIFT
+                and abs(lam_t.real - before.real) <= TRACK_DRIFT * abs(before.real)
+            ):
+                return None  # off centre: only the same copy, moving slowly
             c.search = cid
             c.polished = (lam_t, q1, u, yq, res)
             if moved != 0:
