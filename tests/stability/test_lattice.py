@@ -582,3 +582,47 @@ def test_off_centre_exponents_tracked_into_a_band() -> None:
         searched_unstable += int(not res.stable and not res.info["tracked"])
     assert off_centre_tracked >= 20
     assert searched_unstable >= 5
+
+
+def test_averaged_modes_from_the_modal_solve() -> None:
+    """A modal solve leaves its eigen-decomposition of the time-averaged pencil on the
+    system; the lattice method then takes its averaged modes from it (no second eigenvalue
+    problem). On a damped gyroscopic rotor with a mesh-like time-varying spring: the
+    exponents equal the eigenvalues of the first-order state matrix (NumPy, from M, D, K),
+    the left and right vectors are eigenvectors of the balanced pencil and biorthonormal,
+    and the verdict equals the one without the decomposition."""
+    from rheolin.floquet.averaged import _Averaged, _averaged_pencil
+
+    rng = np.random.default_rng(3)
+    n = 6
+    M = np.diag(rng.uniform(1.0, 3.0, n))
+    A = rng.standard_normal((n, n))
+    K = A @ A.T + n * np.diag(rng.uniform(1.0, 1e3, n))
+    G = np.zeros((n, n))
+    G[0, 1], G[1, 0] = 4.0, -4.0  # gyroscopic
+    D = 0.01 * K / np.sqrt(np.max(np.diag(K))) + G
+    Kk = np.zeros((n, n))
+    Kk[2, 2] = Kk[3, 3] = 0.05 * K[2, 2]
+    Kk[2, 3] = Kk[3, 2] = -0.05 * K[2, 2]
+    f = np.zeros(n, complex)
+    f[0] = 1.0
+    s = rl.PeriodicSystem(3.0, M={0: M}, D={0: D}, K={0: K, 1: Kk, -1: Kk}, f={1: f})
+    sol = rl.solve(s, 12, backend="modal", method="gmres", stability=False)
+    assert sol.success and "_averaged_decomposition" in s.__dict__
+    avg = _Averaged(s)
+    state = np.block(
+        [[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, D)]]
+    )
+    ref = np.linalg.eigvals(state)
+    assert max(np.min(np.abs(ref - z)) / abs(z) for z in avg.lam) < 1e-12
+    assert max(np.min(np.abs(avg.lam - z)) / abs(z) for z in ref) < 1e-12
+    Ad, Bd, _ = _averaged_pencil(s, avg.sq, avg.sv)
+    assert np.max(np.abs(Ad @ avg.X - (Bd @ avg.X) * avg.lam)) < 1e-10 * np.abs(Ad).max()
+    Wh = avg.W.conj().T
+    assert np.max(np.abs(Wh @ Ad - avg.lam[:, None] * (Wh @ Bd))) < 1e-10 * np.abs(Ad).max()
+    assert np.max(np.abs(avg.WB @ avg.X - np.eye(2 * n))) < 1e-12
+    with_modes = rl.floquet(s, method="lattice", order=3)
+    del s.__dict__["_averaged_decomposition"]
+    without = rl.floquet(s, method="lattice", order=3)
+    assert with_modes.decided and with_modes.stable == without.stable
+    assert abs(with_modes.max_real - without.max_real) <= 1e-9 * abs(without.max_real)

@@ -83,6 +83,10 @@ class ModalInverse:
         if not (np.all(np.isfinite(lam)) and np.all(np.isfinite(Vi))):
             raise ModalUnavailable("non-finite eigen-decomposition")
         self.lam = lam
+        #: ``(lam, V, V^-1, L_K, L_K^-T, L_M^-1)``: the decomposition in the coordinates above
+        #: (the lattice Floquet method takes its time-averaged modes from it, see
+        #: :class:`rheolin.floquet.averaged._Averaged`)
+        self.decomposition = (lam, V, Vi, Lk, LkTi, Lmi)
         self._PhiT = np.ascontiguousarray((LkTi @ V[:N]).T)  # (2N, N)
         self._PsiT = np.ascontiguousarray((Vi[:, N:] @ Lmi).T)  # (N, 2N)
         gap = pencil.s(self.ns)[:, None] - lam[None, :]
