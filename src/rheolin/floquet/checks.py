@@ -41,7 +41,7 @@ class _Outer:
         if self.O.size == 0:
             return 0.0
         r = np.asarray(self.oi.Q(lam, w) @ q).reshape(self.O.size, n)
-        a = np.conj(np.asarray(self.io.Q(lam, w).conj().T @ u)).reshape(self.O.size, n)
+        a = np.asarray(self.io.Q(lam, w).T @ np.conj(u)).reshape(self.O.size, n)  # conj(Q^H u)
         den = np.vdot(u, hill.inner.dQ(lam, w) @ q)
         if den == 0:
             return float("inf")

@@ -750,9 +750,10 @@ def _arnoldi(
 class _Shifted:
     """A sparse LU of ``Q(sigma)`` that remembers its (possibly nudged) shift."""
 
-    def __init__(self, lu: Any, sigma: complex) -> None:
+    def __init__(self, lu: Any, sigma: complex, Q: Any = None) -> None:
         self.lu = lu
         self.sigma = sigma
+        self.Q = Q  # the matrix factorized
 
     def solve(self, b: np.ndarray, trans: str = "N") -> np.ndarray:
         return np.asarray(self.lu.solve(b, trans=trans))
@@ -814,8 +815,8 @@ def _factor(hill: LatticeHill, sigma: complex, w: float, *, many: bool = False) 
             if Q.shape[0] > (PARDISO_ABOVE_ARNOLDI if many else PARDISO_ABOVE):
                 f = _pardiso_factor(hill, Q)
                 if f is not None:
-                    return _Shifted(f, sigma)
-            return _Shifted(spla.splu(Q, **SPLU), sigma)
+                    return _Shifted(f, sigma, Q)
+            return _Shifted(spla.splu(Q, **SPLU), sigma, Q)
         except RuntimeError:  # exactly singular
             sigma += 1e-7 * scale * (1 + 1j) * 10**attempt
     raise RuntimeError(f"cannot factorize the lattice Hill operator near {sigma}")
@@ -838,19 +839,21 @@ def _polish(
     """
     lu = _factor(hill, lam, w)
     dQ = hill.inner.dQ(lam, w)
+    dQH = dQ.conj().T
     q1 = lu.solve(np.asarray(dQ @ q))
     q1 /= np.linalg.norm(q1)
-    u = lu.solve(np.asarray(dQ.conj().T @ q1), trans="H")  # a start for the left vector
+    u = lu.solve(np.asarray(dQH @ q1), trans="H")  # a start for the left vector
     u /= np.linalg.norm(u)
-    u = lu.solve(np.asarray(dQ.conj().T @ u), trans="H")
+    u = lu.solve(np.asarray(dQH @ u), trans="H")
     u /= np.linalg.norm(u)
-    num = np.vdot(u, hill.Q(lam) @ q1)
+    Q = lu.Q if lu.sigma == lam else hill.Q(lam)
+    num = np.vdot(u, Q @ q1)
     den = np.vdot(u, dQ @ q1)
     limit = 1e-4 * max(abs(lam), w) if step is None else step
     if den != 0 and np.isfinite(num / den) and abs(num / den) < limit:
         lam = lam - num / den
     P = hill.inner.P(lam, w)
-    return complex(lam), q1, u, np.asarray(P.conj().T @ u)
+    return complex(lam), q1, u, np.conj(np.asarray(P.T @ np.conj(u)))
 
 
 def _partner(

@@ -15,11 +15,20 @@ import numpy as np
 import xarray as xr
 
 from .. import __version__
+from ..mechanics.joints import COMPONENTS
 from ..mechanics.model import Model
+from ..mechanics.outputs import bearing_force_array, transmission_error_array
 from .compute import OperatingPoint, solve_point
 from .dataset import complex_values, frequency_markers, point_dataset
 
-__all__ = ["amplitudes", "speed_coordinates", "sweep_attrs", "sweep_dataset", "sweep_speeds"]
+__all__ = [
+    "amplitudes",
+    "point_amplitudes",
+    "speed_coordinates",
+    "sweep_attrs",
+    "sweep_dataset",
+    "sweep_speeds",
+]
 
 
 def amplitudes(ds: xr.Dataset) -> dict[str, Any]:
@@ -36,6 +45,45 @@ def amplitudes(ds: xr.Dataset) -> dict[str, Any]:
         out["bearing_force"] = Fr * two
     if "dte" in ds:
         out["dte"] = np.abs(complex_values(ds["dte"])) * two
+    return out
+
+
+def point_amplitudes(point: OperatingPoint) -> dict[str, xr.DataArray]:
+    """:func:`amplitudes` straight from a solved point, without its full Dataset (a study
+    makes them at every speed: 3 ms instead of 12 ms on the gearbox). Coordinates
+    ``harmonic``, ``node`` (with ``body``), ``bearing``, ``mesh``; the same values."""
+    a, sol = point.assembled, point.solution
+    keep = sol.harmonics >= 0
+    harmonics = sol.harmonics[keep]
+    two = np.where(harmonics > 0, 2.0, 1.0)
+    nodes = list(a.node_index)
+    ix, iy = COMPONENTS.index("ux"), COMPONENTS.index("uy")
+    idx = np.array([6 * a.node_index[k] for k in nodes], dtype=np.int64)
+    q = sol.q[keep]
+    coords: dict[str, Any] = {
+        "harmonic": ("harmonic", harmonics),
+        "node": ("node", [f"{b}:{i}" for b, i in nodes]),
+        "body": ("node", [b for b, _ in nodes]),
+    }
+    radial = np.hypot(np.abs(q[:, idx + ix]), np.abs(q[:, idx + iy])) * two[:, None]
+    out = {"response": xr.DataArray(radial, dims=("harmonic", "node"), coords=coords)}
+    names = list(a.joints)
+    if names:
+        F = np.array([bearing_force_array(sol, a, j)[1] for j in names])  # (bearing, h, 6)
+        Fr = np.hypot(np.abs(F[..., 0]), np.abs(F[..., 1])) * two[None, :]
+        out["bearing_force"] = xr.DataArray(
+            Fr,
+            dims=("bearing", "harmonic"),
+            coords={"bearing": ("bearing", names), "harmonic": ("harmonic", harmonics)},
+        )
+    meshes = list(a.meshes)
+    if meshes:
+        E = np.array([transmission_error_array(sol, a, m)[1] for m in meshes])
+        out["dte"] = xr.DataArray(
+            np.abs(E) * two[None, :],
+            dims=("mesh", "harmonic"),
+            coords={"mesh": ("mesh", meshes), "harmonic": ("harmonic", harmonics)},
+        )
     return out
 
 

@@ -64,12 +64,11 @@ def _real_gmres(
     opts: Options,
     scale: float,
     restart: int,
-    x0: np.ndarray | None = None,
 ) -> tuple[np.ndarray, int, list[float]]:
-    """GMRES over R on half-spectrum complex arrays (rows = harmonics ``n >= 0``).
+    """GMRES over R on half-spectrum complex arrays (rows = harmonics ``n >= 0``), from zero
+    (:func:`_gmres_from` starts from a guess).
 
-    ``scale`` converts the residual to the reported one: ``||r|| / scale``; ``x0`` is an
-    initial guess (same shape as ``rhs``).
+    ``scale`` converts the residual to the reported one: ``||r|| / scale``.
     """
     shape = rhs.shape
     w = np.sqrt(weights)[:, None]
@@ -100,7 +99,7 @@ def _real_gmres(
     y, info = spla.gmres(
         B,
         b,
-        x0=np.zeros(size) if x0 is None else to_real(x0),
+        x0=np.zeros(size),
         rtol=min(opts.rtol * scale / bnorm, 0.5),
         atol=0.0,
         restart=restart,
@@ -117,17 +116,30 @@ MAX_REFINEMENTS = 3
 Step = Callable[[np.ndarray, "np.ndarray | None"], tuple[np.ndarray, int, list[float]]]
 
 
-def _better_than_zero(
+def _gmres_from(
     apply: Callable[[np.ndarray], np.ndarray],
     rhs: np.ndarray,
     x0: np.ndarray | None,
     norm: Callable[[np.ndarray], float],
-) -> np.ndarray | None:
-    """``x0`` if its residual is below that of zero (``||rhs||``), else None: a guess from
-    a distant speed must not make GMRES start worse than from scratch."""
-    if x0 is None or not norm(rhs - apply(x0)) < norm(rhs):
-        return None
-    return x0
+    weights: np.ndarray,
+    opts: Options,
+    scale: float,
+    restart: int,
+) -> tuple[np.ndarray, int, list[float]]:
+    """GMRES from ``x0`` when its residual is below that of zero (``||rhs||``), else from
+    zero: a guess from a distant speed must not make GMRES start worse than from scratch.
+    From ``x0`` it solves for the correction, ``A dx = rhs - A x0`` from zero, which is the
+    same iteration without SciPy's second product for the same initial residual (one
+    product fewer per solve: 5 % of a continued gearbox solve)."""
+    if x0 is not None:
+        r0 = rhs - apply(x0)
+        start = norm(r0)
+        if start < opts.rtol * scale:  # converged already (SciPy's own first test)
+            return x0, 0, []
+        if start < norm(rhs):
+            dx, info, history = _real_gmres(apply, r0, weights, opts, scale, restart)
+            return x0 + dx, info, history
+    return _real_gmres(apply, rhs, weights, opts, scale, restart)
 
 
 def _support_step(op: HarmonicBalance, opts: Options) -> Step:
@@ -143,8 +155,7 @@ def _support_step(op: HarmonicBalance, opts: Options) -> Step:
         q0 = op.solve_A0(F)
         rhs = -op.apply_dA_support(q0[:, cols], rows, cols)
         Z0 = None if x0 is None else -op.apply_dA_support(x0[:, cols], rows, cols)
-        Z0 = _better_than_zero(reduced, rhs, Z0, op.norm)
-        Z, info, history = _real_gmres(reduced, rhs, weights, opts, op.rhs_norm, 200, Z0)
+        Z, info, history = _gmres_from(reduced, rhs, Z0, op.norm, weights, opts, op.rhs_norm, 200)
         Y = F.copy()
         Y[:, rows] += Z
         return op.solve_A0(Y), info, history
@@ -161,8 +172,9 @@ def _full_step(op: HarmonicBalance, opts: Options) -> Step:
 
     def step(F: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, list[float]]:
         Y0 = None if x0 is None else op.apply_A0(x0)
-        Y0 = _better_than_zero(preconditioned, F, Y0, op.norm)
-        Y, info, history = _real_gmres(preconditioned, F, weights, opts, op.rhs_norm, 60, Y0)
+        Y, info, history = _gmres_from(
+            preconditioned, F, Y0, op.norm, weights, opts, op.rhs_norm, 60
+        )
         return op.solve_A0(Y), info, history
 
     return step
@@ -202,8 +214,9 @@ def _band_step(op: HarmonicBalance, opts: Options) -> tuple[Step | None, str]:
 
     def step(F: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, list[float]]:
         Y0 = None if x0 is None else op.half((P @ op.expand(x0).ravel()).reshape(nh, nd))
-        Y0 = _better_than_zero(preconditioned, F, Y0, op.norm)
-        Y, info, history = _real_gmres(preconditioned, F, weights, opts, op.rhs_norm, 60, Y0)
+        Y, info, history = _gmres_from(
+            preconditioned, F, Y0, op.norm, weights, opts, op.rhs_norm, 60
+        )
         return inverse(Y), info, history
 
     what = (
@@ -342,8 +355,9 @@ def _pairs_step(op: HarmonicBalance, opts: Options) -> tuple[Step | None, str]:
 
     def step(F: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, list[float]]:
         Y0 = None if x0 is None else op.apply(x0)
-        Y0 = _better_than_zero(preconditioned, F, Y0, op.norm)
-        Y, info, history = _real_gmres(preconditioned, F, weights, opts, op.rhs_norm, 60, Y0)
+        Y, info, history = _gmres_from(
+            preconditioned, F, Y0, op.norm, weights, opts, op.rhs_norm, 60
+        )
         return inverse(Y), info, history
 
     what = (

@@ -28,8 +28,8 @@ import numpy as np
 import xarray as xr
 
 from ..results.compute import OperatingPoint
-from ..results.dataset import frequency_markers, netcdf_engine, point_dataset, write_dataset
-from ..results.sweep import amplitudes
+from ..results.dataset import frequency_markers, netcdf_engine, write_dataset
+from ..results.sweep import point_amplitudes
 
 #: Coordinates a chunk keeps (frequency and order follow from speed and harmonic).
 _KEEP = ("harmonic", "node", "body", "bearing", "mesh")
@@ -41,7 +41,7 @@ def point_row(p: OperatingPoint, floquet: Any, seconds: float) -> xr.Dataset:
     """One computed point as a Dataset without the ``point`` dimension."""
     s = p.solution
     data: dict[str, Any] = {}
-    amps = amplitudes(point_dataset(p))
+    amps = point_amplitudes(p)
     for key, units in (("response", "m"), ("bearing_force", "N"), ("dte", "m")):
         if key in amps:
             data[key] = amps[key].assign_attrs(units=units, long_name=f"{key} amplitude")
@@ -56,11 +56,9 @@ def point_row(p: OperatingPoint, floquet: Any, seconds: float) -> xr.Dataset:
         "message": str(s.message),
         "seconds": float(seconds),
     }
-    ds = xr.Dataset(data)
+    scalars["speed"] = float(p.assembled.speed)
+    ds = xr.Dataset({**data, **{key: ((), value) for key, value in scalars.items()}})
     ds = ds.drop_vars([c for c in ds.coords if c not in _KEEP])
-    for key, value in scalars.items():
-        ds[key] = value
-    ds["speed"] = float(p.assembled.speed)
     blob = b"" if floquet is None else pickle.dumps(floquet, protocol=pickle.HIGHEST_PROTOCOL)
     ds.attrs["floquet"] = blob  # moved into floquet_pickle by chunk_dataset
     a = p.assembled
