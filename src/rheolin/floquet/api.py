@@ -356,7 +356,11 @@ def _floquet_lattice(
     )
     with np.errstate(under="ignore"), _single_thread_blas():
         start = continuation.start(system.n, lattice) if continuation is not None else None
-        out = lattice_exponents(system, lattice, near=near, start=start, same_system=False)
+        # the truncation estimates are made last, for the exponents the confirmations keep
+        # (those they replace by finer ones need none)
+        out = lattice_exponents(
+            system, lattice, near=near, start=start, same_system=False, defer_truncation=True
+        )
         if continuation is not None and near is None:
             continuation.keep(system.n, lattice, out)
         # unresolved exponents: search their clusters again on finer lattices (p + 1, p + 2),
@@ -386,6 +390,9 @@ def _floquet_lattice(
                 break  # nothing left that a finer lattice could settle
         if steps:
             out.info["confirmed"] = steps
+        if out.settle is not None:
+            out.settle(out, np.flatnonzero(np.isnan(out.truncation)))
+            out.settle = None  # it holds the lattice's operators
     w = system.omega
     res = _result(out.exponents, out.bounds, out.edge, w, "lattice", info=out.info)
     order = np.argsort(-out.exponents.real, kind="stable")

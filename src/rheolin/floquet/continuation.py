@@ -59,7 +59,9 @@ class Continuation:
     def keep(self, n: int, lattice: Lattice, out: LatticeExponents) -> None:
         """Keep a search's result as it is now (a later confirmation on a finer lattice
         replaces some of its fields: the copy keeps these)."""
-        self._kept[(n, lattice.order)] = (lattice.indices.copy(), copy.copy(out))
+        kept = copy.copy(out)
+        kept.settle = None  # pending truncation estimates are not continued
+        self._kept[(n, lattice.order)] = (lattice.indices.copy(), kept)
 
     def clear(self) -> None:
         """Forget every kept search (the next call starts cold)."""

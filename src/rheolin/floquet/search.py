@@ -568,25 +568,28 @@ def lattice_exponents(
 
 
 def _settler(outer: _Outer, deferred: list[tuple[int, complex, np.ndarray, np.ndarray]]) -> Any:
-    """``(out, rows) -> None``: the truncation estimates of those rows of ``out`` (a
-    representative's row and its conjugate's share one), computed once each. (The result is
-    an argument, not captured: a result holding a closure over itself is a reference cycle,
-    which kept the finer lattices' operators and PARDISO factors alive until a full garbage
-    collection: 2 GB per worker over a run-up.)"""
-    first = np.array([d[0] for d in deferred], dtype=int)
+    """``(out, rows) -> None``: the truncation estimates of those rows of ``out``, found by
+    their exponent (a representative's row and its conjugate's share one estimate, computed
+    once), so that the rows may have moved since (a confirmation keeps some coarse rows and
+    appends finer ones). (The result is an argument, not captured: a result holding a closure
+    over itself is a reference cycle, which kept the finer lattices' operators and PARDISO
+    factors alive until a full garbage collection: 2 GB per worker over a run-up.)"""
+    requests = {complex(lam): (lam, q, u) for _, lam, q, u in deferred}
+    known: dict[complex, float] = {}
 
     def settle(out: LatticeExponents, rows: np.ndarray) -> None:
         for row in np.asarray(rows, dtype=int):
             if not np.isnan(out.truncation[row]):
                 continue
-            i = int(np.searchsorted(first, row, side="right")) - 1
-            start, lam, q, u = deferred[i]
-            end = int(first[i + 1]) if i + 1 < first.size else out.exponents.size
-            tau = outer.estimate(lam, q, u)
-            out.truncation[start:end] = tau
-            out.uncertainty[start:end] = np.maximum(
-                out.uncertainty[start:end], TRUNCATION_SAFETY * tau
-            )
+            z = complex(out.exponents[row])
+            key = z if z in requests else complex(np.conj(z))
+            if key not in requests:
+                continue  # not this lattice's exponent
+            if key not in known:
+                known[key] = outer.estimate(*requests[key])
+            tau = known[key]
+            out.truncation[row] = tau
+            out.uncertainty[row] = max(out.uncertainty[row], TRUNCATION_SAFETY * tau)
 
     return settle
 

@@ -46,10 +46,11 @@ def assemble(
     parts = [c.drop_vars(_FLOQUET, errors="ignore").drop_vars("speed") for c in chunks]
     if parts:
         flat = xr.concat(parts, dim="point", join="outer", coords="different", compat="equals")
-        flat = flat.sortby("point")
-        if np.unique(flat["point"].values).size != flat.sizes["point"]:
-            raise ValueError("a point appears in two chunks")
-        flat = flat.reindex(point=np.arange(n))
+        if not np.array_equal(flat["point"].values, np.arange(n)):  # else nothing to move
+            flat = flat.sortby("point")
+            if np.unique(flat["point"].values).size != flat.sizes["point"]:
+                raise ValueError("a point appears in two chunks")
+            flat = flat.reindex(point=np.arange(n))
     else:
         flat = xr.Dataset(coords={"point": np.arange(n)})
     lead = (*spec.dims,)
