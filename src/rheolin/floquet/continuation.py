@@ -7,10 +7,11 @@ confirmations included). The next call matches its clusters of time-averaged exp
 previous ones and *tracks* each matched cluster's exponents: moved by the cluster's averaged
 shift and polished there (an LU and three solves, no Arnoldi run). They are kept only when
 they pass the tests a search's exponents pass (converged to a backward error of 1e-10, which
-enters their bounds; centred; standing for their own cluster; meeting its quota as distinct
-exponents); any other cluster is searched, starting from the previous eigenvectors (a
-confirmation's cluster unresolved at the previous speed from this speed's coarse vectors:
-an unresolved exponent's continuation is unresolved again). The checks of the verdict are
+enters their bounds; centred, or the same off-centre copy as before, moving slowly; standing
+for their own cluster; meeting its quota as distinct exponents); any other cluster is
+searched, starting from the previous eigenvectors (a confirmation's cluster unresolved at the
+previous speed from this speed's coarse vectors: an unresolved exponent's continuation is
+unresolved again). The checks of the verdict are
 those of a call without one (docs/stability.md, section 5). An unmatched cluster starts cold,
 and so does everything after a change of model size.
 

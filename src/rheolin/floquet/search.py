@@ -455,7 +455,7 @@ def lattice_exponents(
     radii: list[float] = []
     conj_index = _conjugate_index(lam0)
     outer = _Outer(hill, avg) if nh > 0 else None
-    deferred: list[tuple[int, complex, np.ndarray, np.ndarray]] = []  # (first row, lam, q, u)
+    deferred: list[tuple[complex, np.ndarray, np.ndarray]] = []  # (lam, q, u)
     radius: dict[int, float] = {}
     for c, conj_too in reps:
         # a representative the truncation does not resolve (its energy on the outer shells,
@@ -490,7 +490,7 @@ def lattice_exponents(
             tau = 0.0
         elif defer_truncation:
             tau = float("nan")
-            deferred.append((len(lams), lam_c, xq, u))
+            deferred.append((lam_c, xq, u))
         else:
             tau = outer.estimate(lam_c, xq, u)
         part = _partner(c, H, n, avg.WB, conj_index)
@@ -567,14 +567,14 @@ def lattice_exponents(
     return result
 
 
-def _settler(outer: _Outer, deferred: list[tuple[int, complex, np.ndarray, np.ndarray]]) -> Any:
+def _settler(outer: _Outer, deferred: list[tuple[complex, np.ndarray, np.ndarray]]) -> Any:
     """``(out, rows) -> None``: the truncation estimates of those rows of ``out``, found by
     their exponent (a representative's row and its conjugate's share one estimate, computed
     once), so that the rows may have moved since (a confirmation keeps some coarse rows and
     appends finer ones). (The result is an argument, not captured: a result holding a closure
     over itself is a reference cycle, which kept the finer lattices' operators and PARDISO
     factors alive until a full garbage collection: 2 GB per worker over a run-up.)"""
-    requests = {complex(lam): (lam, q, u) for _, lam, q, u in deferred}
+    requests = {complex(lam): (lam, q, u) for lam, q, u in deferred}
     known: dict[complex, float] = {}
 
     def settle(out: LatticeExponents, rows: np.ndarray) -> None:
