@@ -25,7 +25,7 @@ import scipy.linalg as sla
 
 import rheolin as rl
 from rheolin.data import example_path
-from rheolin.hill import hill_pencil
+from rheolin.harmonics.hill import hill_pencil
 from rheolin.io import parse_document
 
 

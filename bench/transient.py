@@ -163,9 +163,9 @@ def probe(system, H, rtol: float, backend: str) -> dict:  # type: ignore[no-unty
     Estimate = wall time of the first half (the start) + the second half's rate over the
     rest of two periods: a lower bound (the detector needs at least two periods).
     """
-    import rheolin.solvers._transient_backends as be
     import rheolin.solvers.transient as tr
-    from rheolin.operator import HarmonicBalance
+    import rheolin.solvers.transient.backends as be
+    from rheolin.harmonics.balance import HarmonicBalance
     from rheolin.solvers.registry import Options
 
     op = HarmonicBalance(system, H)

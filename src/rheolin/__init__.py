@@ -12,12 +12,12 @@ import logging
 
 from .errors import ModelError
 from .floquet import FloquetResult, floquet
-from .harmonics import HarmonicSet, TruncationWarning
+from .harmonics.sets import HarmonicSet, TruncationWarning
 from .mechanics import Assembled, Model
-from .preload import OperatingPoint, operating_point
-from .solution import STATUS, Solution
+from .mechanics.preload.equilibrium import OperatingPoint, operating_point
 from .solvers import METHODS, solve
-from .system import PeriodicSystem
+from .solvers.solution import STATUS, Solution
+from .system.periodic import PeriodicSystem
 
 __all__ = [
     "METHODS",

@@ -82,7 +82,7 @@ def test_run_results_reopen_with_xarray_and_match_the_python_api(small_run):
     dofs = p.assembled.dofs("b", 1)[:2]
     expected = np.array([ref.harmonic(int(n))[dofs] for n in ds["harmonic"].values])
     assert np.allclose(q.values, expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max())
-    from rheolin.mechanics.outputs import bearing_forces, transmission_errors
+    from rheolin.results.outputs import bearing_forces, transmission_errors
 
     F = complex_values(ds["bearing_force"].sel(bearing="a2"))
     rows = bearing_forces(ref, p.assembled, "a2")

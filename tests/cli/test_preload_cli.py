@@ -103,7 +103,7 @@ def test_linearized_model_file_keeps_the_preloads(tmp_path: Path) -> None:
     reloaded: the same static response and the same bearing forces."""
     import rheolin as rl
     from rheolin.io import load_model
-    from rheolin.mechanics.outputs import bearing_force_array
+    from rheolin.results.outputs import bearing_force_array
 
     (tmp_path / "pair.toml").write_text(PAIR)
     lin = load_model(tmp_path / "pair.toml").operating_point(100.0).model

@@ -216,7 +216,7 @@ def test_support_coupling_matches_the_assembled_coupled_matrix(sparse: bool) -> 
     Random local time variation at harmonics 1, 2 and 5 on DOFs 1-3 of a 6-DOF system: rows
     ``m >= 0`` read sources ``n = m - k < 0`` (conjugated), which the half storage must get right.
     """
-    from rheolin.operator import HarmonicBalance
+    from rheolin.harmonics.balance import HarmonicBalance
 
     rng = np.random.default_rng(3)
     n = 6

@@ -13,8 +13,8 @@ pytest.importorskip("skfem")
 from rheolin.data import example_path
 from rheolin.fe.gearbox_housing import BEARINGS, build
 from rheolin.io import load_model
-from rheolin.mechanics.outputs import bearing_force_array
 from rheolin.results.compute import solve_point
+from rheolin.results.outputs import bearing_force_array
 
 W = 3000 * np.pi / 30
 

@@ -8,7 +8,7 @@ import pytest
 
 import rheolin as rl
 from rheolin.mechanics import Model
-from rheolin.mechanics.outputs import bearing_forces, node_displacements, transmission_errors
+from rheolin.results.outputs import bearing_forces, node_displacements, transmission_errors
 
 
 @pytest.fixture(autouse=True)

@@ -1,4 +1,4 @@
-"""The preloaded operating point (rheolin.preload) against closed forms, SciPy special
+"""The preloaded operating point (rheolin.mechanics.preload) against closed forms, SciPy special
 functions, an independent scalar root and a transient (BDF) simulation of the nonlinear
 equations.
 
@@ -28,7 +28,7 @@ from scipy.special import gamma
 import rheolin as rl
 from rheolin.errors import ModelError
 from rheolin.mechanics.model import Model
-from rheolin.mechanics.outputs import bearing_force_array
+from rheolin.results.outputs import bearing_force_array
 
 G = 9.81
 HERTZ = 2e10  # N/m^1.5, a lumped ball-bearing law F = K delta^1.5

@@ -37,7 +37,7 @@ def test_backward_error_matches_its_definition_on_a_dense_operator():
     """The backward error of a perturbed solution against the dense coupled operator,
     assembled here independently: within the factor ||A||_2 / (its upper bound)."""
     from rheolin.harmonics import HarmonicSet
-    from rheolin.operator import HarmonicBalance
+    from rheolin.harmonics.balance import HarmonicBalance
 
     rng = np.random.default_rng(3)
     n, w = 4, 1.3

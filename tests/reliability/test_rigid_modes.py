@@ -12,7 +12,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import rheolin as rl
-from rheolin.rigid_modes import find_rigid_modes
+from rheolin.system.rigid_modes import find_rigid_modes
 
 J1, J2, K0, EPS, C, W = 2.0, 3.0, 4.0e4, 0.3, 6.0, 90.0
 T_MEAN, T_DYN = 5.0, 2.0  # on inertia 1: a mean torque (taken by the drive) and a 1x one
@@ -153,7 +153,7 @@ def test_large_sparse_free_chain_is_held_after_harmonic_0_reports_singular():
     w != 0: a dense solve of K - w^2 M + i w D."""
     import scipy.sparse as sp
 
-    from rheolin.rigid_modes import DENSE_LIMIT
+    from rheolin.system.rigid_modes import DENSE_LIMIT
 
     n, k, m, w = 1200, 2.0e6, 0.5, 700.0
     assert n > DENSE_LIMIT

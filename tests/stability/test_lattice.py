@@ -26,8 +26,8 @@ from scipy.special import mathieu_a, mathieu_b
 import rheolin as rl
 from rheolin.budget import MemoryBudgetError
 from rheolin.floquet import TRUNCATION_SAFETY
-from rheolin.hill import hill_pencil
-from rheolin.lattice import harmonic_lattice, system_lattice
+from rheolin.harmonics.hill import hill_pencil
+from rheolin.harmonics.lattice import harmonic_lattice, system_lattice
 from rheolin.stability.mechanism import MESH, classify
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "core"))
@@ -358,8 +358,8 @@ def test_error_bound_norms_equal_those_of_the_assembled_pencil(k_scale: float, w
 
     import scipy.sparse.linalg as spla
 
-    from rheolin.hill import state_scaling
-    from rheolin.hill_lattice import LatticeHill
+    from rheolin.harmonics.hill import state_scaling
+    from rheolin.harmonics.hill_lattice import LatticeHill
 
     search = importlib.import_module("rheolin.floquet.search")
     rng = np.random.default_rng(3)

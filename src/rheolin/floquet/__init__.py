@@ -25,7 +25,7 @@ verdict), ``dense``, ``sparse`` and ``common`` (the grid paths), and for the lat
 ``outcome``.
 """
 
-from ..hill import hill_matrices, hill_pencil
+from ..harmonics.hill import hill_matrices, hill_pencil
 from .api import (
     AUTO_DENSE_LIMIT,
     DEFAULT_LATTICE_ORDER,

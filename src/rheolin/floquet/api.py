@@ -13,10 +13,10 @@ import numpy as np
 
 from ..budget import MemoryBudgetError, format_bytes
 from ..budget import memory_budget as resolve_budget
-from ..harmonics import HarmonicSet, as_harmonic_set
-from ..lattice import Lattice, harmonic_lattice, system_lattice
-from ..rigid_modes import find_rigid_modes
-from ..system import PeriodicSystem
+from ..harmonics.lattice import Lattice, harmonic_lattice, system_lattice
+from ..harmonics.sets import HarmonicSet, as_harmonic_set
+from ..system.periodic import PeriodicSystem
+from ..system.rigid_modes import find_rigid_modes
 from .averaged import lattice_memory
 from .confirm import confirm_unresolved
 from .continuation import Continuation
@@ -76,11 +76,11 @@ def floquet(
 
     The truncated Hill pencil has a copy of every exponent for each harmonic, shifted by
     ``i h w1``; the representative kept is the eigenvalue whose eigenvector is centred on
-    harmonic 0. The pencil is balanced first (:func:`~rheolin.hill.state_scaling`) and every
+    harmonic 0. The pencil is balanced first (:func:`~rheolin.harmonics.state_scaling`) and every
     exponent carries its own tolerance from its condition number, so stiff springs next to
     soft ones and undamped modes do not turn into false instabilities. Rigid-body modes (free
     motions with mass, e.g. an unsupported torsion) are constrained first
-    (:mod:`rheolin.rigid_modes`, said in ``info["note"]``): their double zero exponent is a
+    (:mod:`rheolin.system.rigid_modes`, said in ``info["note"]``): their double zero exponent is a
     Jordan block that round-off would split into a false ``+-sqrt(eps)`` pair.
 
     Parameters
@@ -91,8 +91,8 @@ def floquet(
         The truncation. ``None`` (default) chooses: the time-averaged eigenproblem for a
         time-invariant system; the dense grid of :func:`dense_stability_harmonics` when its
         Hill matrix is small (and, when that grid leaves the verdict undecided, the lattice
-        method if it decides); else the lattice of :func:`~rheolin.lattice.system_lattice`.
-        An int ``N`` means ``-N..N``; a :class:`~rheolin.lattice.Lattice` selects the lattice
+        method if it decides); else the lattice of :func:`~rheolin.harmonics.system_lattice`.
+        An int ``N`` means ``-N..N``; a :class:`~rheolin.harmonics.Lattice` selects the lattice
         method. The dense and sparse methods accept only dense grids (multiples of one
         step), because their representatives and truncation test assume one.
     method
@@ -188,7 +188,7 @@ def _floquet(
         if harmonics is not None:
             raise ValueError(
                 "method='lattice' builds its own truncation: pass `order` (and no `harmonics`), "
-                "or a rheolin.lattice.Lattice as `harmonics`"
+                "or a rheolin.harmonics.lattice.Lattice as `harmonics`"
             )
         return _lattice_auto(
             system,
@@ -271,7 +271,7 @@ def _require_grid(hset: HarmonicSet) -> None:
             f"Hill methods; this set has {H.size} of the {2 * N + 1} multiples of {step} up to "
             f"{N * step}. Their representatives and truncation test assume a grid and would "
             "judge a lattice wrongly: use method='lattice' (rl.floquet(system, "
-            "method='lattice', order=p)) or pass a rheolin.lattice.Lattice"
+            "method='lattice', order=p)) or pass a rheolin.harmonics.lattice.Lattice"
         )
 
 

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
-from ..hill import _dense, state_scaling
-from ..lattice import Lattice
-from ..operator import coefficient_blocks
-from ..system import PeriodicSystem
+from ..harmonics.balance import coefficient_blocks
+from ..harmonics.hill import _dense, state_scaling
+from ..harmonics.lattice import Lattice
+from ..system.periodic import PeriodicSystem
 from .result import _EPS
 
 __all__ = ["LU_FILL", "MAX_AVERAGED_DENSE", "lattice_memory"]
@@ -98,7 +98,7 @@ def _from_modal(
 def _averaged_pencil(
     system: PeriodicSystem, sq: np.ndarray, sv: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The balanced time-averaged pencil ``(A, B)`` of :func:`rheolin.hill.hill_pencil` on
+    """The balanced time-averaged pencil ``(A, B)`` of :func:`rheolin.harmonics.hill.hill_pencil` on
     harmonic 0, dense, and its mass block: ``A = [[0, S_q S_v^-1], [-K, -D]]``,
     ``B = diag(I, M)`` with ``K = S_v^-1 K_0 S_q^-1``, ``D = S_v^-1 D_0 S_v^-1``,
     ``M = S_v^-1 M_0 S_v^-1``."""

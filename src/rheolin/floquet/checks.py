@@ -10,9 +10,9 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..hill import _dense, scaled_entries
-from ..hill_lattice import LatticeHill
-from ..system import PeriodicSystem
+from ..harmonics.hill import _dense, scaled_entries
+from ..harmonics.hill_lattice import LatticeHill
+from ..system.periodic import PeriodicSystem
 from .averaged import MAX_AVERAGED_DENSE, _Averaged
 from .outcome import LatticeExponents
 from .result import TRUNCATION_SAFETY
@@ -141,8 +141,8 @@ def _radii(
 
 def _compact(mats: list[Any]) -> tuple[Any, ...]:
     """``(rows, q columns, v columns, K, D, M)``: the coupling matrices (entries from
-    :func:`rheolin.hill.scaled_entries`, None where absent) as dense blocks on their nonzero
-    rows and columns (K on the q columns, D and M on the v columns)."""
+    :func:`~rheolin.harmonics.hill.scaled_entries`, None where absent) as dense blocks on
+    their nonzero rows and columns (K on the q columns, D and M on the v columns)."""
     none = np.zeros(0, dtype=np.int64)
     K, D, M = mats
     rows = np.unique(np.concatenate([a[0] for a in mats if a is not None] + [none]))

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..lattice import Lattice
-from ..system import PeriodicSystem
+from ..harmonics.lattice import Lattice
+from ..system.periodic import PeriodicSystem
 from .checks import _agree, _certify, _split_gaps
 from .outcome import LatticeExponents
 from .result import TRUNCATION_SAFETY

@@ -34,7 +34,7 @@ import copy
 
 import numpy as np
 
-from ..lattice import Lattice
+from ..harmonics.lattice import Lattice
 from .outcome import LatticeExponents
 
 __all__ = ["Continuation"]

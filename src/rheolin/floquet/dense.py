@@ -8,9 +8,9 @@ import warnings
 import numpy as np
 import scipy.linalg as sla
 
-from ..harmonics import HarmonicSet
-from ..hill import _dense, _diag, hill_pencil
-from ..system import PeriodicSystem
+from ..harmonics.hill import _dense, _diag, hill_pencil
+from ..harmonics.sets import HarmonicSet
+from ..system.periodic import PeriodicSystem
 from .common import _edge_weight, _error_bound, _fold, _harmonic_energy, _representatives
 from .result import FloquetResult, _result
 

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from ..lattice import Lattice
+from ..harmonics.lattice import Lattice
 
 __all__ = [
     "DECIDE_SAFETY",
@@ -100,7 +100,7 @@ class FloquetResult:
     complete
         Lattice method: as many exponents were found as the time-averaged system has.
     lattice
-        Lattice method: the :class:`~rheolin.lattice.Lattice` of the truncation.
+        Lattice method: the :class:`~rheolin.harmonics.lattice.Lattice` of the truncation.
     dominant
         Lattice method: for each exponent, the index of the time-averaged mode (in
         ``averaged``) that carries most of its eigenvector at harmonic 0.

@@ -11,9 +11,9 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..hill_lattice import LatticeHill
-from ..lattice import Lattice
-from ..system import PeriodicSystem
+from ..harmonics.hill_lattice import LatticeHill
+from ..harmonics.lattice import Lattice
+from ..system.periodic import PeriodicSystem
 from .averaged import _Averaged
 from .checks import _gershgorin, _Outer, _split_gaps, liouville_sum
 from .outcome import LatticeExponents
@@ -596,7 +596,7 @@ def _settler(outer: _Outer, deferred: list[tuple[complex, np.ndarray, np.ndarray
 
 def _pencil_norms(hill: LatticeHill, sq: np.ndarray, sv: np.ndarray) -> tuple[float, float]:
     """1-norms of the balanced first-order Hill pencil ``(A, B)`` of
-    :func:`rheolin.hill.hill_pencil` on the lattice, from the couplings of ``hill`` (column
+    :func:`~rheolin.harmonics.hill_pencil` on the lattice, from the couplings of ``hill`` (column
     sums; without building the pencil, which cost 0.15 s at order 3 on the gearbox).
 
     Columns of harmonic ``h``: ``q`` columns ``|w h| + sum |K| / (s_v,row s_q,col)``, ``v``

@@ -11,9 +11,9 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..harmonics import HarmonicSet
-from ..hill import hill_pencil
-from ..system import PeriodicSystem
+from ..harmonics.hill import hill_pencil
+from ..harmonics.sets import HarmonicSet
+from ..system.periodic import PeriodicSystem
 from .common import _edge_weight, _error_bound, _fold, _harmonic_energy, _representatives
 from .result import FloquetResult, _result
 

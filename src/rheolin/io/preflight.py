@@ -71,7 +71,7 @@ def preflight(
     (default: the file's); raise :class:`~rheolin.ModelError` or
     :class:`~rheolin.budget.MemoryBudgetError` naming the field. ``needs_load=False`` (a
     Campbell diagram) accepts a model without loads."""
-    from ..harmonics import HarmonicSet
+    from ..harmonics.sets import HarmonicSet
 
     h = lm.spec.harmonics
     order = h.order if order is None else order

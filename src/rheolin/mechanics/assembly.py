@@ -14,7 +14,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import ModelError
-from ..system import PeriodicSystem
+from ..system.periodic import PeriodicSystem
 from ._term import Term
 from .speeds import SpeedPlan
 

@@ -125,7 +125,7 @@ class Model:
         self.meshes: dict[str, dict[str, Any]] = {}
         self.forces: dict[str, dict[str, Any]] = {}
         self.links: dict[str, dict[str, Any]] = {}
-        #: load-dependent joints and applied torques (the operating point, rheolin.preload)
+        #: load-dependent joints and applied torques (operating point: mechanics.preload)
         self.rolling: dict[str, dict[str, Any]] = {}
         self.torques: dict[str, dict[str, Any]] = {}
         self.gravity: np.ndarray | None = None
@@ -528,7 +528,7 @@ class Model:
         exerts on its support at zero relative displacement, a preloaded spring: it acts as
         ``preload + K delta``; the static load ``-preload`` on the node (``+preload`` on the
         other node) and the reported bearing force include it. A linearized load-dependent
-        joint is such a spring (:mod:`rheolin.preload`). Constant joints only.
+        joint is such a spring (:mod:`rheolin.mechanics.preload`). Constant joints only.
 
         >>> m = Model()
         >>> m.add_shaft("s", [0.0, 0.5], outer_diameter=0.05, material="steel")
@@ -616,8 +616,8 @@ class Model:
         The force acts in the bearing plane (normal to the body's axis) on the node's motion
         relative to ground or to ``other_node``; ``damping`` [N s/m] is a constant radial
         damping. The model is then solved about its operating point (static equilibrium
-        under gravity, static forces and torques; :mod:`rheolin.preload`), where this bearing
-        becomes a linear joint with its tangent stiffness.
+        under gravity, static forces and torques; :mod:`~rheolin.mechanics.preload`), where this
+        bearing becomes a linear joint with its tangent stiffness.
 
         >>> m = Model()
         >>> m.add_shaft("s", [0.0, 0.2], outer_diameter=0.04, material="steel")
@@ -654,7 +654,7 @@ class Model:
         about the axis): the input torque, or the output load. ``torque="reaction"``: the
         torque that balances all the others on the free rotation of the drive train (the
         output load of a gearbox driven by a given input torque). The model is then solved
-        about its operating point (:mod:`rheolin.preload`).
+        about its operating point (:mod:`rheolin.mechanics.preload`).
 
         >>> m = Model()
         >>> m.add_rigid_body("r", (0, 0, 0), 1.0, (1e-3, 1e-3, 2e-3))
@@ -689,8 +689,8 @@ class Model:
     def operating_point(self, speed: float) -> Any:
         """The static equilibrium under the model's static loads and torques at input
         ``speed`` [rad/s], and the model linearized there
-        (:class:`rheolin.preload.OperatingPoint`); cached per speed."""
-        from ..preload import operating_point
+        (:class:`rheolin.mechanics.preload.OperatingPoint`); cached per speed."""
+        from .preload.equilibrium import operating_point
 
         key = (_positive(speed, "speed"), len(self.calls))  # a changed model: computed anew
         if key not in self._operating:
@@ -767,7 +767,7 @@ class Model:
         ``face_width`` [m]: ISO 6336-1's reduction below 100 N/mm) or ``"table"``
         (``load_stiffness`` [N/m] at ``load_forces`` [N]); the whole stiffness function is
         scaled by the operating (tangent) stiffness over its mean. The model is then solved
-        about its operating point (:mod:`rheolin.preload`).
+        about its operating point (:mod:`rheolin.mechanics.preload`).
         """
         self._new_item(name, self.meshes)
         for fld, bname, node in (
@@ -866,7 +866,7 @@ class Model:
         """An exact rigid connection: ``other_node`` follows ``node`` as if welded to it,
         ``u_b = u_a + phi_a x (p_b - p_a)``, ``phi_b = phi_a`` (``components``: only those of
         the other node's DOFs; None: all six). The constrained DOFs are eliminated from the
-        equations (:mod:`rheolin.constraints`), not tied by a stiff spring: a short massless
+        equations (:mod:`rheolin.system.constraints`), not tied by a stiff spring: a short massless
         connecting piece, a keyed hub or a stiff coupling without ill-conditioning. Chains of
         links are resolved; a DOF constrained twice is refused.
 
@@ -920,7 +920,7 @@ class Model:
         changing the model. A :attr:`preloaded` model whose static stiffness does not
         depend on the speed is linearized once; otherwise at each speed."""
         if self.preloaded:
-            from ..preload import preloaded_template
+            from .preload.equilibrium import preloaded_template
 
             return preloaded_template(self)
         return SpeedTemplate(self)

@@ -1,5 +1,5 @@
 """Load-dependent joints: rolling-element bearings and gear meshes whose stiffness depends on
-the load they carry (the laws; the operating point is found in :mod:`rheolin.preload`).
+the load they carry (the laws; the operating point is found in :mod:`rheolin.mechanics.preload`).
 
 Rolling-element bearings (radial; the force acts in the bearing plane, normal to the axis):
 

@@ -17,9 +17,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import scipy.sparse as sp
 
-from ..constraints import LinearConstraint
 from ..errors import ModelError
-from ..system import PeriodicSystem
+from ..system.constraints import LinearConstraint
+from ..system.periodic import PeriodicSystem
 from ._term import SpeedTerm, Term
 from .assembly import Assembled
 from .beam import beam_speed_term

@@ -10,12 +10,12 @@ import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..harmonics import HarmonicSet, TruncationWarning
+from ..harmonics.sets import HarmonicSet, TruncationWarning
 from ..mechanics.assembly import Assembled
 from ..mechanics.model import Model
 from ..mechanics.template import SpeedTemplate
-from ..solution import Solution
 from ..solvers import solve
+from ..solvers.solution import Solution
 
 __all__ = ["OperatingPoint", "harmonic_set", "solve_point"]
 

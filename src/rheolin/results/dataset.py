@@ -21,9 +21,9 @@ from .. import __version__
 from ..io.atomic import atomic_write
 from ..mechanics.assembly import Assembled
 from ..mechanics.joints import COMPONENTS
-from ..mechanics.outputs import bearing_force_array, transmission_error_array
-from ..solution import Solution
+from ..solvers.solution import Solution
 from .compute import OperatingPoint
+from .outputs import bearing_force_array, transmission_error_array
 
 __all__ = [
     "complex_values",

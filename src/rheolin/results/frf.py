@@ -7,10 +7,10 @@ the harmonic balance is the Hill operator of the stability analysis at ``lambda 
 
     sum_n ( K_{m-n} + s_n D_{m-n} + s_n^2 M_{m-n} ) q_n = F delta_{m0},   s_n = i (w + n w1),
 
-over the harmonic lattice of the coefficient harmonics (:mod:`rheolin.lattice`, order ``p``;
-docs/stability.md). ``q_0`` per unit force is the receptance ``H(w)``; the ``q_h`` are its
-sidebands. A time-invariant system (an axisymmetric rotor at constant speed) has the lattice
-``{0}`` and the classical ``H(w) = (K - w^2 M + i w (D + W G))^-1``.
+over the harmonic lattice of the coefficient harmonics (:mod:`~rheolin.harmonics.lattice`,
+order ``p``; docs/stability.md). ``q_0`` per unit force is the receptance ``H(w)``; the
+``q_h`` are its sidebands. A time-invariant system (an axisymmetric rotor at constant speed)
+has the lattice ``{0}`` and the classical ``H(w) = (K - w^2 M + i w (D + W G))^-1``.
 
 >>> import numpy as np, rheolin as rl
 >>> s = rl.PeriodicSystem(1.0, M={0: np.eye(1)}, D={0: 0.2 * np.eye(1)}, K={0: 4 * np.eye(1)})
@@ -32,11 +32,11 @@ import scipy.sparse.linalg as spla
 
 from ..budget import MemoryBudgetError, format_bytes, memory_budget
 from ..errors import ModelError
-from ..harmonics import TruncationWarning
-from ..hill_lattice import LatticeHill
-from ..lattice import Lattice, harmonic_lattice, system_lattice
+from ..harmonics.hill_lattice import LatticeHill
+from ..harmonics.lattice import Lattice, harmonic_lattice, system_lattice
+from ..harmonics.sets import TruncationWarning
 from ..linalg.direct import analyze, resolve_backend
-from ..system import PeriodicSystem
+from ..system.periodic import PeriodicSystem
 
 __all__ = [
     "FrequencyResponse",

@@ -17,9 +17,9 @@ import xarray as xr
 from .. import __version__
 from ..mechanics.joints import COMPONENTS
 from ..mechanics.model import Model
-from ..mechanics.outputs import bearing_force_array, transmission_error_array
 from .compute import OperatingPoint, solve_point
 from .dataset import frequency_markers
+from .outputs import bearing_force_array, transmission_error_array
 
 __all__ = [
     "point_amplitudes",

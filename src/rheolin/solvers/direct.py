@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse.linalg as spla
 
-from ..operator import HarmonicBalance
+from ..harmonics.balance import HarmonicBalance
 from .registry import Options, SolverOutcome, register
 
 #: Refuse to assemble coupled systems with more stored entries than this.

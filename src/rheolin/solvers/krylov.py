@@ -46,7 +46,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..operator import HarmonicBalance
+from ..harmonics.balance import HarmonicBalance
 from .registry import Options, SolverOutcome, register
 
 #: Use the ``support`` strategy when ``dA`` touches at most this many DOFs.

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..errors import ModelError
-from ..operator import HarmonicBalance
+from ..harmonics.balance import HarmonicBalance
 from .registry import Options, SolverOutcome, register
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..operator import HarmonicBalance
+from ..harmonics.balance import HarmonicBalance
 from .registry import Options, SolverOutcome, register
 
 

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..operator import HarmonicBalance
+from ..harmonics.balance import HarmonicBalance
 
 __all__ = ["METHODS", "Options", "SolverOutcome", "register"]
 

@@ -11,13 +11,13 @@ import numpy as np
 
 from ..budget import format_bytes, memory_budget
 from ..floquet import Continuation, dense_stability_harmonics, floquet, floquet_memory
-from ..harmonics import HarmonicSet, as_harmonic_set
-from ..operator import HarmonicBalance, SingularBlockError
-from ..rigid_modes import RigidModes, find_rigid_modes
-from ..solution import Solution
-from ..system import PeriodicSystem
+from ..harmonics.balance import HarmonicBalance, SingularBlockError
+from ..harmonics.sets import HarmonicSet, as_harmonic_set
+from ..system.periodic import PeriodicSystem
+from ..system.rigid_modes import RigidModes, find_rigid_modes
 from . import direct, krylov, lti, perturbation, transient  # noqa: F401  (register the methods)
 from .registry import METHODS, RESIDUAL_CHECKED, Options, SolverOutcome
+from .solution import Solution
 
 __all__ = ["solve", "stability_harmonics"]
 
@@ -62,7 +62,7 @@ def solve(
     rtol
         Tolerance of the iterative methods on ``||f - A q|| / ||f||``, and the acceptance
         criterion of every result on the backward error ``||f - A q|| / (||A|| ||q|| +
-        ||f||)`` (:meth:`~rheolin.operator.HarmonicBalance.backward_error`, reported as
+        ||f||)`` (:meth:`~rheolin.harmonics.balance.HarmonicBalance.backward_error`, reported as
         ``Solution.residual``; the relative residual is ``info["relative_residual"]``).
         See docs/solvers.md.
     maxiter
@@ -183,7 +183,7 @@ def _constrained(
     x0: Solution | np.ndarray | None,
     kwargs: dict[str, Any],
 ) -> Solution:
-    """Solve with the rigid-body modes held (:mod:`rheolin.rigid_modes`); the result is on
+    """Solve with the rigid-body modes held (:mod:`rheolin.system.rigid_modes`); the result is on
     every DOF of ``system``."""
     sol = _reduced(rigid, system, hset, x0, kwargs)
     sol.message = f"{rigid.note(system)}; {sol.message}"
@@ -199,7 +199,7 @@ def _linked(
     x0: Solution | np.ndarray | None,
     kwargs: dict[str, Any],
 ) -> Solution:
-    """Solve with the system's exact constraints eliminated (:mod:`rheolin.constraints`);
+    """Solve with the system's exact constraints eliminated (:mod:`rheolin.system.constraints`);
     the result is on every DOF of ``system``."""
     c = system.constraint
     sol = _reduced(c, system, hset, x0, kwargs)

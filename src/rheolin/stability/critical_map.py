@@ -95,7 +95,7 @@ def _averaged_parts(model: Any) -> tuple[Any, ...]:
     """``(M, K_0, K_2, G, T, assembled)`` of the time-averaged system, by speed
     (``K = K_0 + W K_1 + W^2 K_2``, ``D = D_0 + W G``) from three assemblies, reduced by
     ``T`` when the model has a free axial or torsional motion (held: no critical speed at 0)."""
-    from ..rigid_modes import find_rigid_modes
+    from ..system.rigid_modes import find_rigid_modes
 
     W = np.array([1.0, 2.0, 3.0])
     built = [model.assemble(float(w)) for w in W]
@@ -228,7 +228,7 @@ def critical_speed_map(
     ``stiffness`` [N/m] in turn: isotropic across the bearing's body axis, no cross-coupling,
     no damping; their axial and rotational terms are kept. The model itself is not changed.
     """
-    from ..preload import linearized
+    from ..mechanics.preload.equilibrium import linearized
 
     k = np.asarray(stiffness, dtype=float).ravel()
     if k.size == 0 or not np.all(np.isfinite(k)) or np.any(k <= 0):

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from ..lattice import combination_text, harmonic_lattice
+from ..harmonics.lattice import combination_text, harmonic_lattice
 
 __all__ = [
     "ASYMMETRY",

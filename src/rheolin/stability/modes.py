@@ -15,9 +15,9 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..hill import hill_pencil, state_scaling
+from ..harmonics.hill import hill_pencil, state_scaling
 from ..mechanics.rotation import transverse_basis
-from ..system import PeriodicSystem
+from ..system.periodic import PeriodicSystem
 
 __all__ = ["AveragedModes", "averaged_modes", "mac", "mode_energy", "mode_kind", "whirl_ratio"]
 

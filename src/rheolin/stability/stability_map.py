@@ -10,7 +10,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..floquet import FloquetResult, floquet
-from ..harmonics import as_harmonic_set
+from ..harmonics.sets import as_harmonic_set
 from .mechanism import (
     ASYMMETRY,
     CIRCULATORY,

@@ -24,7 +24,7 @@ import xarray as xr
 from threadpoolctl import threadpool_limits
 
 from ..budget import MemoryBudgetError
-from ..harmonics import TruncationWarning
+from ..harmonics.sets import TruncationWarning
 from ..io.loader import LoadedModel
 from .chunks import chunk_dataset, point_row
 from .spec import Settings, StudySpec

@@ -18,12 +18,12 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from .budget import format_bytes, solve_budget
-from .harmonics import HarmonicSet
-from .linalg import BlockInverse, Pencil, SingularBlockError, default_workers, make_inverse
-from .linalg.memory import SolveMemory
-from .linalg.memory import check as check_memory
-from .system import PeriodicSystem
+from ..budget import format_bytes, solve_budget
+from ..linalg import BlockInverse, Pencil, SingularBlockError, default_workers, make_inverse
+from ..linalg.memory import SolveMemory
+from ..linalg.memory import check as check_memory
+from ..system.periodic import PeriodicSystem
+from .sets import HarmonicSet
 
 __all__ = ["HarmonicBalance", "SingularBlockError", "default_workers"]
 

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from .harmonics import HarmonicSet
+from .sets import HarmonicSet
 
 __all__ = [
     "Lattice",
@@ -147,7 +147,7 @@ def coupling_strengths(system: Any) -> dict[int, float]:
     """Strength of each positive coefficient harmonic ``k``, in the balanced Hill pencil.
 
     ``||Tv K_k Tq||_1 + ||Tv D_k Tv||_1 + w_ref ||Tv M_k Tv||_1`` with the balancing of
-    :func:`rheolin.hill.state_scaling` (all terms in rad/s) and ``w_ref`` the median local
+    :func:`rheolin.harmonics.hill.state_scaling` (all terms in rad/s) and ``w_ref`` the median local
     frequency ``sqrt(k_ii / m_ii)``.
     """
     from .hill import state_scaling

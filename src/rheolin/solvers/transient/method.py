@@ -45,10 +45,11 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..operator import HarmonicBalance
-from ..system import PeriodicSystem
-from ._transient_backends import _run_scipy, _run_sundae
-from ._transient_model import (
+from ...harmonics.balance import HarmonicBalance
+from ...system.periodic import PeriodicSystem
+from ..registry import Options, SolverOutcome, register
+from .backends import _run_scipy, _run_sundae
+from .model import (
     STALL_NOISE,
     STALL_RATIO,
     STALL_WINDOW,
@@ -56,7 +57,6 @@ from ._transient_model import (
     _Detector,
     _SingularMass,
 )
-from .registry import Options, SolverOutcome, register
 
 __all__ = [
     "DEFAULTS",

@@ -11,8 +11,8 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from .errors import ModelError
-from .io.units import UnitError, to_si
+from ..errors import ModelError
+from ..io.units import UnitError, to_si
 
 __all__ = ["parse_speed", "parse_speeds", "print_summary"]
 

@@ -13,8 +13,8 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from .harmonics import HarmonicSet, as_harmonic_set
-from .system import PeriodicSystem
+from ..system.periodic import PeriodicSystem
+from .sets import HarmonicSet, as_harmonic_set
 
 __all__ = ["hill_matrices", "hill_pencil", "state_scaling"]
 

@@ -5,8 +5,8 @@ the quadratic eigenproblem ``Q(lambda) q = 0``,
 
     Q(lambda)_{mn} = K_{m-n} + s_n D_{m-n} + s_n^2 M_{m-n},   s_n = lambda + i n w1,
 
-over the harmonics ``m, n`` of a lattice (:mod:`rheolin.lattice`). Its first-order form is
-the Hill pencil of :func:`rheolin.hill.hill_pencil`; a shift-invert step of that pencil needs
+over the harmonics ``m, n`` of a lattice (:mod:`rheolin.harmonics.lattice`). Its first-order form is
+the Hill pencil of :func:`~rheolin.harmonics.hill_pencil`; a shift-invert step of that pencil needs
 only one solve with ``Q(sigma)``, of half the size (docs/stability.md). Every matrix here is
 assembled from the block patterns once; a new shift costs one vector operation on the values.
 Nothing is quadratic in the lattice size.
@@ -17,8 +17,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .operator import _Block, _Patterns, coefficient_blocks
-from .system import PeriodicSystem
+from ..system.periodic import PeriodicSystem
+from .balance import _Block, _Patterns, coefficient_blocks
 
 __all__ = ["LatticeHill"]
 

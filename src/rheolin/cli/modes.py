@@ -27,14 +27,14 @@ def modes(
     DIR/modes.png (deflected lines and whirl orbits)."""
     import xarray as xr
 
-    from ._cli_errors import err, set_kept, sigterm_as_interrupt
-    from ._cli_report import parse_speeds
-    from .cli import _fail, _load, _out_dir, console
-    from .io.outdir import staged_output
-    from .plots.modes import plot_mode_shapes
-    from .results.dataset import write_dataset
-    from .stability.campbell import STANDSTILL
-    from .stability.modes import averaged_modes, mode_energy, mode_kind, whirl_ratio
+    from ..io.outdir import staged_output
+    from ..plots.modes import plot_mode_shapes
+    from ..results.dataset import write_dataset
+    from ..stability.campbell import STANDSTILL
+    from ..stability.modes import averaged_modes, mode_energy, mode_kind, whirl_ratio
+    from .app import _fail, _load, _out_dir, console
+    from .errors import err, set_kept, sigterm_as_interrupt
+    from .report import parse_speeds
 
     lm = _load(model)
     (w,) = parse_speeds(speed, "--speed", allow_zero=True)[:1]

@@ -35,8 +35,8 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
-from .errors import ModelError
-from .io.units import UnitError, to_si
+from ..errors import ModelError
+from ..io.units import UnitError, to_si
 
 __all__ = ["condense_command", "register"]
 
@@ -85,8 +85,8 @@ def _file(base: Path, value: Any, where: str) -> Path:
 
 def read_fe(spec: dict[str, Any], base: Path) -> Any:
     """The :class:`~rheolin.fe.FEModel` of the spec's ``[fe]`` table."""
-    from .fe import FEModel
-    from .fe.abaqus import read_abaqus
+    from ..fe import FEModel
+    from ..fe.abaqus import read_abaqus
 
     fe = _table(spec, "fe", "")
     _unknown(fe, {"format", "stiffness", "mass", "damping", "nodes", "units"}, "fe")
@@ -144,7 +144,7 @@ def _select(fe: Any, table: dict[str, Any], where: str) -> np.ndarray:
 
 def condense_spec(spec_path: Path) -> Any:
     """The :class:`~rheolin.fe.CondensedFE` a spec file describes."""
-    from .fe import Coupling, condense
+    from ..fe import Coupling, condense
 
     try:
         spec = tomllib.loads(spec_path.read_text())

@@ -21,7 +21,7 @@ about its operating point:
    regularized with the bearings' reference stiffness (Levenberg), which changes the path,
    not the equilibrium. Rigid links are eliminated as in the dynamics. Free rigid-body
    motions (the drive train's rotation) are held as the dynamics holds them
-   (``R^T M_0 u = 0``, :mod:`rheolin.rigid_modes`); a ``"reaction"`` torque takes the value
+   (``R^T M_0 u = 0``, :mod:`rheolin.system.rigid_modes`); a ``"reaction"`` torque takes the value
    that balances the others on them, and any load left on them is reported.
 2. **Linearization.** Each bearing becomes a linear joint with its tangent stiffness and a
    preload (``F(d_s) - K_t d_s``, so that the static force is exact); each mesh's stiffness
@@ -45,11 +45,11 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .errors import ModelError
-from .mechanics.joints import COMPONENTS
-from .mechanics.rotation import transverse_basis
-from .rigid_modes import find_rigid_modes
-from .system import PeriodicSystem
+from ...errors import ModelError
+from ...system.periodic import PeriodicSystem
+from ...system.rigid_modes import find_rigid_modes
+from ..joints import COMPONENTS
+from ..rotation import transverse_basis
 
 __all__ = ["BearingState", "MeshState", "OperatingPoint", "operating_point", "preloaded_template"]
 
@@ -188,7 +188,7 @@ class OperatingPoint:
 
 # --------------------------------------------------------------------------- replay
 def _replay(model: Any, replace: Callable[[str, dict[str, Any]], list[tuple[str, dict]]]) -> Any:
-    from .mechanics.model import Model
+    from ..model import Model
 
     out = Model(input_body=model.input_body, unbalance_reference=model.unbalance_reference)
     for method, kwargs in model.calls:
@@ -638,7 +638,7 @@ def speed_independent(model: Any) -> bool:
     """True when the static problem of a preloaded model does not depend on the speed (no
     speed tables, no speed-dependent mean stiffness or static load): one operating point
     serves every speed."""
-    from .mechanics.template import SpeedTemplate
+    from ..template import SpeedTemplate
 
     base = SpeedTemplate(_base(model))
     K = base._K.patterns.get(0)

@@ -8,7 +8,7 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
-from .errors import ModelError
+from ..errors import ModelError
 
 __all__ = ["import_ross", "register"]
 
@@ -21,7 +21,7 @@ OUT = typer.Option(
 
 def import_ross(rotor: Path = ROTOR, out: Path | None = OUT) -> None:
     """Convert a ROSS rotor file to a rheolin model file (ROSS itself is not needed)."""
-    from .io.ross import model_from_ross
+    from ..io.ross import model_from_ross
 
     try:
         text = model_from_ross(rotor).to_toml(out)

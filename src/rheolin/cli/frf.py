@@ -52,16 +52,16 @@ def frf(
 ) -> None:
     """Frequency response at a fixed speed (non-synchronous excitation): DIR/frf.nc and
     DIR/bode.png; the resonance peaks printed with their half-power amplification factors."""
-    from ._cli_errors import EXIT_FAILED, err, set_kept, sigterm_as_interrupt
-    from ._cli_report import parse_speed, parse_speeds
-    from .budget import format_bytes, memory_budget
-    from .cli import _fail, _load, _out_dir, _stability_flag, console
-    from .floquet import floquet, floquet_memory
-    from .io.outdir import staged_output
-    from .plots.frf import plot_bode
-    from .results.api684 import amplification_factors
-    from .results.dataset import write_dataset
-    from .results.frf import frequency_response, parse_dof
+    from ..budget import format_bytes, memory_budget
+    from ..floquet import floquet, floquet_memory
+    from ..io.outdir import staged_output
+    from ..plots.frf import plot_bode
+    from ..results.api684 import amplification_factors
+    from ..results.dataset import write_dataset
+    from ..results.frf import frequency_response, parse_dof
+    from .app import _fail, _load, _out_dir, _stability_flag, console
+    from .errors import EXIT_FAILED, err, set_kept, sigterm_as_interrupt
+    from .report import parse_speed, parse_speeds
 
     lm = _load(model)
     w_speed = parse_speed(speed)

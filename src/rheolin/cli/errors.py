@@ -32,9 +32,9 @@ try:  # typer >= 0.2x carries its own copy of click
 except ImportError:  # pragma: no cover - typer on the click package
     from click.exceptions import NoArgsIsHelpError, UsageError  # type: ignore[assignment]
 
-from .budget import MemoryBudgetError
-from .errors import ModelError
-from .io.units import UnitError
+from ..budget import MemoryBudgetError
+from ..errors import ModelError
+from ..io.units import UnitError
 
 __all__ = [
     "EXIT_FAILED",

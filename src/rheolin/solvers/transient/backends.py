@@ -9,10 +9,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import scipy.sparse as sp
 
-from ._transient_model import _Coefficients, _Detector, _MassInverse, _Series
+from .model import _Coefficients, _Detector, _MassInverse, _Series
 
 if TYPE_CHECKING:
-    from .transient import TransientSettings
+    from .method import TransientSettings
 
 log = logging.getLogger(__name__)
 

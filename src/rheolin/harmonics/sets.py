@@ -124,7 +124,7 @@ class HarmonicSet:
                         if (cap is None or abs(m) <= cap) and m not in current:
                             new.add(m)
                 if max_size is not None and 2 * (len(current) + len(new)) > max_size:
-                    from .budget import MemoryBudgetError
+                    from ..budget import MemoryBudgetError
 
                     raise MemoryBudgetError(
                         f"the harmonic set grows beyond max_size={max_size} indices "

@@ -12,11 +12,11 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..system import PeriodicSystem
+from ...system.periodic import PeriodicSystem
 
 if TYPE_CHECKING:
-    from ..operator import HarmonicBalance
-    from .transient import TransientSettings
+    from ...harmonics.balance import HarmonicBalance
+    from .method import TransientSettings
 
 log = logging.getLogger(__name__)
 

@@ -36,7 +36,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .constraints import LinearConstraint
-from .system import PeriodicSystem
+from .periodic import PeriodicSystem
 
 __all__ = ["DENSE_LIMIT", "RIGID_TOL", "RigidModes", "find_rigid_modes"]
 
@@ -70,7 +70,7 @@ class RigidModes(LinearConstraint):
 
     ``pivots`` are the eliminated DOFs (one per mode, where no time-varying coefficient acts
     when possible), ``keep`` the others; ``q[keep] = y`` and ``q[pivots] = G y``
-    (:class:`~rheolin.constraints.LinearConstraint`).
+    (:class:`~rheolin.system.constraints.LinearConstraint`).
     """
 
     modes: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .system import PeriodicSystem
+from ..system.periodic import PeriodicSystem
 
 __all__ = ["chain_with_mesh"]
 

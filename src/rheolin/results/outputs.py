@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..solution import Solution
-from .assembly import Assembled
+from ..mechanics.assembly import Assembled
+from ..solvers.solution import Solution
 
 __all__ = [
     "HarmonicRow",

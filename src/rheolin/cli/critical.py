@@ -28,8 +28,8 @@ _RANGE = re.compile(r"^\s*([-+0-9.eE]+)\s*:\s*([-+0-9.eE]+)\s*:\s*([0-9]+)\s*(.*
 
 
 def _stiffness(text: str) -> np.ndarray:
-    from .cli import _fail
-    from .io.units import UnitError, to_si
+    from ..io.units import UnitError, to_si
+    from .app import _fail
 
     m = _RANGE.match(text)
     if not m:
@@ -55,13 +55,13 @@ def critical_map(
     """Undamped critical-speed map: the forward synchronous critical speeds with every
     bearing's transverse stiffness set to each value (isotropic, undamped); DIR/critical_map.nc
     and DIR/critical_map.png, and the critical speeds at the model's own stiffness printed."""
-    from ._cli_errors import err, set_kept, sigterm_as_interrupt
-    from .cli import _fail, _load, _out_dir, console
-    from .errors import ModelError
-    from .io.outdir import staged_output
-    from .plots.campbell import plot_critical_map
-    from .results.dataset import write_dataset
-    from .stability.critical_map import critical_speed_map, synchronous_critical_speeds
+    from ..errors import ModelError
+    from ..io.outdir import staged_output
+    from ..plots.campbell import plot_critical_map
+    from ..results.dataset import write_dataset
+    from ..stability.critical_map import critical_speed_map, synchronous_critical_speeds
+    from .app import _fail, _load, _out_dir, console
+    from .errors import err, set_kept, sigterm_as_interrupt
 
     lm = _load(model)
     k = _stiffness(stiffness)

@@ -20,7 +20,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from ._cli_errors import (
+from .errors import (
     EXIT_FAILED,
     EXIT_INPUT,
     EXIT_INTERRUPTED,
@@ -47,9 +47,9 @@ def run_sweep(
 ) -> int:
     """Run the study of ``rheolin sweep``; returns the exit code (0, 1, 2, 130). ``run`` holds
     the keywords of :func:`rheolin.study.run_study` (``out``, ``workers``, ...)."""
-    from .errors import ModelError
-    from .study import ParameterError, Settings, StudyInterrupted, StudySpec, run_study
-    from .study.files import write_results
+    from ..errors import ModelError
+    from ..study import ParameterError, Settings, StudyInterrupted, StudySpec, run_study
+    from ..study.files import write_results
 
     def fail(message: str) -> int:
         plain_error(message)
@@ -88,7 +88,7 @@ def _client(address: str | None) -> Iterator[Any]:
         return
     from distributed import Client
 
-    from .errors import ModelError
+    from ..errors import ModelError
 
     try:
         client = Client(address, timeout="10s")
@@ -219,7 +219,7 @@ def print_study_summary(console: Console, err: Console, result: Any) -> None:
                 highlight=False,
                 soft_wrap=True,
             )
-    from .study.files import resonances
+    from ..study.files import resonances
 
     peaks = [
         f"{p['body']} ({p['node']}) {p['speed_rpm']:.0f} rpm, AF "

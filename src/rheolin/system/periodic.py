@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import ModelError
+from ..errors import ModelError
 
 __all__ = ["PeriodicSystem"]
 
@@ -122,7 +122,7 @@ class PeriodicSystem:
         self.f = self._loads(f, n)
         if not (self.M or self.D or self.K):
             raise ModelError("the system is all zero: give at least one nonzero M, D or K")
-        #: exact constraints between DOFs (rigid links; :class:`~rheolin.constraints.
+        #: exact constraints between DOFs (rigid links; :class:`~rheolin.system.constraints.
         #: LinearConstraint`): every analysis eliminates them and answers on all DOFs
         self.constraint = constraint
         #: ``(ix, iy)``: DOF indices of the transverse planes ``(x, y)`` of every node (the

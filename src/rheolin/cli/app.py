@@ -1,6 +1,6 @@
 """Command line ``rheolin``: the terminal belongs to this module only.
 
-Exit codes (every command; :mod:`rheolin._cli_errors` holds the contract):
+Exit codes (every command; :mod:`rheolin.cli.errors` holds the contract):
 
 * 0 -- success;
 * 1 -- the computation ran but did not succeed (not converged, or the operating point is
@@ -28,10 +28,12 @@ from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
-from . import __version__
-from ._cli_condense import register as _register_condense
-from ._cli_critical import register as _register_critical
-from ._cli_errors import (
+from .. import __version__
+from ..errors import ModelError
+from ..harmonics.sets import TruncationWarning
+from .condense import register as _register_condense
+from .critical import register as _register_critical
+from .errors import (
     EXIT_FAILED,
     ContractGroup,
     UserError,
@@ -40,12 +42,10 @@ from ._cli_errors import (
     set_kept,
     sigterm_as_interrupt,
 )
-from ._cli_frf import register as _register_frf
-from ._cli_modes import register as _register_modes
-from ._cli_report import parse_speed, parse_speeds, print_summary
-from ._cli_ross import register as _register_ross
-from .errors import ModelError
-from .harmonics import TruncationWarning
+from .frf import register as _register_frf
+from .modes import register as _register_modes
+from .report import parse_speed, parse_speeds, print_summary
+from .ross import register as _register_ross
 
 app = typer.Typer(
     cls=ContractGroup,
@@ -119,7 +119,7 @@ class _Notes:
 
 
 def _load(path: Path) -> Any:
-    from .io import read_model
+    from ..io import read_model
 
     return read_model(path)
 
@@ -132,7 +132,7 @@ def _options(
     stability: str,
     rtol: float = 1e-10,
 ) -> dict[str, Any]:
-    from .solvers import METHODS
+    from ..solvers import METHODS
 
     allowed = ["auto", *sorted(METHODS)]
     if method not in allowed:
@@ -162,7 +162,7 @@ def _stability_flag(stability: str) -> bool | None:
 
 def _out_dir(out: Path | None, default: str) -> Path:
     """The output directory, refused before any computation when it cannot be written."""
-    from .io.outdir import check_output_dir
+    from ..io.outdir import check_output_dir
 
     return check_output_dir(Path(out) if out is not None else Path(default), "--out")
 
@@ -171,7 +171,7 @@ def _preflight(
     lm: Any, speeds: Any, order: int | None, max_order: float | None, needs_load: bool = True
 ) -> Any:
     """Physical admissibility and sizes against the memory budget, before any work."""
-    from .io.preflight import preflight
+    from ..io.preflight import preflight
 
     return preflight(lm, speeds, order=order, max_order=max_order, needs_load=needs_load)
 
@@ -247,7 +247,7 @@ def example(
 ) -> None:
     """Write a built-in example model file to stdout (rheolin example gearbox > model.toml), or
     its files into --out; gearbox-housing builds its FE housing (scikit-fem) into --out."""
-    from .data import EXAMPLES, example_text
+    from ..data import EXAMPLES, example_text
 
     built = {"gearbox-housing": "the gearbox in a flexible FE housing (needs --out, scikit-fem)"}
     if name not in EXAMPLES and name not in built:
@@ -256,7 +256,7 @@ def example(
     if name in built:
         if out is None:
             raise _fail(f"--out: the {name} example writes two files; give a directory")
-        from .fe.gearbox_housing import build
+        from ..fe.gearbox_housing import build
 
         directory = _out_dir(out, str(out))
         path = build(directory)
@@ -270,7 +270,7 @@ def example(
         sys.stdout.write(example_text(name))
         return
     directory = _out_dir(out, str(out))
-    from .io.atomic import atomic_write
+    from ..io.atomic import atomic_write
 
     with atomic_write(directory / f"{name}.toml") as tmp:
         tmp.write_text(example_text(name))
@@ -292,9 +292,9 @@ def run(
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
 ) -> None:
     """Solve one operating point; write DIR/results.nc, DIR/summary.json and plots."""
-    from .io.outdir import staged_output
-    from .results import point_dataset, solve_point, summarize, write_dataset, write_summary
-    from .results.schema import point_verdict
+    from ..io.outdir import staged_output
+    from ..results import point_dataset, solve_point, summarize, write_dataset, write_summary
+    from ..results.schema import point_verdict
 
     lm = _load(model)
     opts = _options(lm, method, harmonics, max_order, stability, rtol)
@@ -328,7 +328,7 @@ def run(
         write_summary(summary, stage / "summary.json")
         written = [stage / "results.nc", stage / "summary.json"]
         if plots:
-            from .plots import point_plots
+            from ..plots import point_plots
 
             written += point_plots(ds, stage, node_list)
     written = [out_dir / p.name for p in written]
@@ -382,8 +382,8 @@ def sweep(
     """Solve over speeds (and parameter values, --vary) in parallel on Dask, checkpointed:
     a re-run of the same command computes only the missing points. Writes DIR/sweep.nc,
     DIR/sweep.json, plots and (with the map) DIR/stability_map.nc."""
-    from ._cli_study import run_sweep
-    from .plots.study import QUANTITIES
+    from ..plots.study import QUANTITIES
+    from .sweep import run_sweep
 
     lm = _load(model)
     opts = _options(lm, method, harmonics, max_order, stability, rtol)
@@ -413,7 +413,7 @@ def _show_operating_point(model: Any, speed: float, where: str) -> None:
     about: every speed of a sweep or Campbell diagram is linearized there."""
     if not model.preloaded:
         return
-    from ._cli_report import print_operating_point
+    from .report import print_operating_point
 
     console.print(f"[dim]operating point at {speed * 30 / np.pi:.1f} rpm ({where}):[/dim]")
     print_operating_point(console, model.operating_point(speed).to_dict())
@@ -432,8 +432,8 @@ def campbell(
     """Campbell diagram: DIR/campbell.nc and DIR/campbell.png, critical speeds printed;
     with the Floquet stability of the full time-periodic system at every speed (as run and
     sweep: auto checks whenever it fits the memory budget)."""
-    from .io.outdir import staged_output
-    from .stability import campbell as campbell_fn
+    from ..io.outdir import staged_output
+    from ..stability import campbell as campbell_fn
 
     lm = _load(model)
     w = parse_speeds(speeds, allow_zero=True)  # 0: the modes at standstill
@@ -444,8 +444,8 @@ def campbell(
     out_dir = _out_dir(out, f"{model.stem}_campbell")
     if spinning.size:
         _preflight(lm, spinning, None, None, needs_load=False)
-    from .plots.campbell import plot_campbell
-    from .results.dataset import write_dataset
+    from ..plots.campbell import plot_campbell
+    from ..results.dataset import write_dataset
 
     set_kept(f"nothing written; {out_dir} is unchanged")
     with sigterm_as_interrupt():
@@ -509,10 +509,10 @@ def _campbell_stability(model: Any, speeds: np.ndarray, flag: bool | None) -> tu
     """The stability map over the Campbell speeds (None and why when it is not computed)."""
     if flag is False:
         return None, "--stability off"
-    from .budget import format_bytes, memory_budget
-    from .floquet import floquet_memory
-    from .stability import stability_map as map_fn
-    from .study.run import MAP_PRECISION
+    from ..budget import format_bytes, memory_budget
+    from ..floquet import floquet_memory
+    from ..stability import stability_map as map_fn
+    from ..study.run import MAP_PRECISION
 
     kind, estimate = floquet_memory(model.assemble(float(speeds[-1])).system)
     if flag is None and estimate > memory_budget():
@@ -535,7 +535,7 @@ def _campbell_stability(model: Any, speeds: np.ndarray, flag: bool | None) -> tu
 @app.command()
 def demo(out: Path = DEMO_OUT) -> None:
     """The embedded gearbox: one operating point (3000 rpm) and a short sweep."""
-    from .data import example_path
+    from ..data import example_path
 
     path = example_path("gearbox")
     console.rule("rheolin run (gearbox example, 3000 rpm)")

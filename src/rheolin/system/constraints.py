@@ -1,7 +1,7 @@
 """Exact linear constraints between DOFs, eliminated: ``q[pivots] = G q[keep]``.
 
 A rigid link makes one node's DOFs follow another's (``u_b = u_a + phi_a x r``,
-``phi_b = phi_a``); the held rigid-body modes of :mod:`rheolin.rigid_modes` are another case.
+``phi_b = phi_a``); the held rigid-body modes of :mod:`rheolin.system.rigid_modes` are another case.
 Either way the constrained DOFs are eliminated: with ``q = T y`` (``T`` the identity on the
 kept DOFs and ``G`` on the eliminated ones) the equations are projected, ``T^T X(t) T y`` and
 ``T^T f(t)``: the constraint forces drop out exactly, no penalty stiffness is involved, and the
@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from .system import PeriodicSystem
+from .periodic import PeriodicSystem
 
 __all__ = ["LinearConstraint"]
 

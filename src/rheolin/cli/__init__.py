@@ -1,0 +1,5 @@
+"""The ``rheolin`` command line; the terminal belongs to this package only."""
+
+from .app import app, main
+
+__all__ = ["app", "main"]

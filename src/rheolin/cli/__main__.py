@@ -1,0 +1,5 @@
+"""``python -m rheolin.cli``."""
+
+from .app import main
+
+main()

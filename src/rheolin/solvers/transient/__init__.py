@@ -1,0 +1,5 @@
+"""The time-domain baseline: BDF from rest until the response is periodic (docs/solvers.md)."""
+
+from .method import DEFAULTS, TransientSettings, solve_transient, sundae_available
+
+__all__ = ["DEFAULTS", "TransientSettings", "solve_transient", "sundae_available"]
