@@ -21,6 +21,7 @@ from pathlib import Path
 
 import typer
 
+from .. import __version__
 from . import campbell, condense, critical, files, frf, modes, point, ross, sweep
 from .common import console
 from .errors import ContractGroup, set_debug
@@ -40,10 +41,24 @@ app = typer.Typer(
 DEMO_OUT = typer.Option(Path("demo_results"), help="Output directory.")
 
 
+def _print_version(value: bool) -> None:
+    """``rheolin --version``: print the program name and version, then exit 0."""
+    if value:
+        console.print(f"rheolin {__version__}", markup=False)
+        raise typer.Exit()
+
+
 @app.callback()
 def _root(
     debug: bool = typer.Option(
         False, "--debug", help="Show the traceback of an internal error (exit code 3)."
+    ),
+    version: bool = typer.Option(
+        False,
+        "--version",
+        help="Print the version and exit.",
+        is_eager=True,
+        callback=_print_version,
     ),
 ) -> None:
     """rheolin: periodic steady state and stability of rotating transmissions."""
