@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
-from ..harmonics.balance import coefficient_blocks
+from ..harmonics.blocks import coefficient_blocks
 from ..harmonics.hill import _dense, state_scaling
 from ..harmonics.lattice import Lattice
 from ..system.periodic import PeriodicSystem
