@@ -335,7 +335,7 @@ class HarmonicBalance:
             )
             decomposition = getattr(self._inverse, "decomposition", None)
             if decomposition is not None:  # the system's time-averaged modes, for floquet
-                self.system.__dict__["_averaged_decomposition"] = decomposition
+                self.system.keep("averaged_decomposition", decomposition)
             store = getattr(self._inverse, "store", None)
             if store is not None:
                 self.memory.factor_bytes = store.factor_bytes

@@ -148,21 +148,21 @@ def _nbytes(value: Any) -> int:
 
 def coefficient_blocks(system: PeriodicSystem) -> dict[int, Block]:
     """The :class:`Block` of every coefficient harmonic of ``system`` (0 first), built once
-    per system and kept on it (the solve, the stability check and its memory estimate all use
-    them; a system's coefficients are not changed once it is built)."""
-    cache = system.__dict__.get("_coefficient_blocks")
-    if cache is None:
-        sparse = system.is_sparse
+    per system and kept on it (:meth:`~rheolin.system.PeriodicSystem.cached`): the solve, the
+    stability check and its memory estimate all use them."""
+    return dict(system.cached("coefficient_blocks", lambda: _build_blocks(system)))
 
-        def get(table: dict, k: int) -> Any:
-            x = table.get(k)
-            if x is None:
-                return None
-            return sp.csr_array(x) if sparse else np.asarray(x)
 
-        cache = {
-            k: Block(get(system.M, k), get(system.D, k), get(system.K, k), system.n, sparse)
-            for k in [0, *system.coefficient_harmonics]
-        }
-        system.__dict__["_coefficient_blocks"] = cache
-    return dict(cache)
+def _build_blocks(system: PeriodicSystem) -> dict[int, Block]:
+    sparse = system.is_sparse
+
+    def get(table: dict, k: int) -> Any:
+        x = table.get(k)
+        if x is None:
+            return None
+        return sp.csr_array(x) if sparse else np.asarray(x)
+
+    return {
+        k: Block(get(system.M, k), get(system.D, k), get(system.K, k), system.n, sparse)
+        for k in [0, *system.coefficient_harmonics]
+    }
