@@ -22,6 +22,7 @@ from ..budget import format_bytes, solve_budget
 from ..linalg import BlockInverse, Pencil, SingularBlockError, default_workers, make_inverse
 from ..linalg.memory import SolveMemory
 from ..linalg.memory import check as check_memory
+from ..linalg.store import FactorStore
 from ..system.periodic import PeriodicSystem
 from .blocks import Block, Patterns, coefficient_blocks
 from .sets import HarmonicSet
@@ -82,6 +83,7 @@ class HarmonicBalance:
         self._inverse: BlockInverse | None = None
         self._last_residual: tuple[np.ndarray, int, np.ndarray] | None = None
         self._support_maps: tuple[Any, sp.csr_array, sp.csr_array] | None = None
+        self._norm_bound: float | None = None
         self._blocks = coefficient_blocks(system)
         self.pencil = self._pencil()
         self._coupling = self._coupling_maps()
@@ -293,7 +295,7 @@ class HarmonicBalance:
         """An upper bound of ``||A||_2`` of the coupled harmonic-balance operator:
         ``max_n sum_k ((n w1)^2 ||M_k|| + |n w1| ||D_k|| + ||K_k||)`` over the harmonic set
         and the coefficient harmonics, each ``||X||_2 <= sqrt(||X||_1 ||X||_inf)``."""
-        if getattr(self, "_norm_bound", None) is None:
+        if self._norm_bound is None:
             s = self.system
 
             def bound(x: Any) -> float:
@@ -336,7 +338,7 @@ class HarmonicBalance:
             decomposition = getattr(self._inverse, "decomposition", None)
             if decomposition is not None:  # the system's time-averaged modes, for floquet
                 self.system.keep("averaged_decomposition", decomposition)
-            store = getattr(self._inverse, "store", None)
+            store = self.factor_store
             if store is not None:
                 self.memory.factor_bytes = store.factor_bytes
                 self.memory.factors_held = store.factors_alive
@@ -350,6 +352,12 @@ class HarmonicBalance:
                     self.backend_note = f"{self.backend_note}; {note}".lstrip("; ")
             log.debug("A0 inverse: %s %s", self._inverse.name, self.backend_note)
         return self._inverse
+
+    @property
+    def factor_store(self) -> FactorStore | None:
+        """The sparse factors of ``A0(n)`` once :attr:`inverse` is made and keeps them in a
+        :class:`~rheolin.linalg.store.FactorStore`; None otherwise (this makes nothing)."""
+        return getattr(self._inverse, "store", None)
 
     def factorize(self) -> None:
         """Make the inverse of ``A0(n)`` for every ``n >= 0`` now (once)."""
