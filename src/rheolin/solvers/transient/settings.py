@@ -176,9 +176,9 @@ def _default_atol(op: HarmonicBalance, rtol: float) -> np.ndarray:
     """``rtol`` times the size of the steady response (q and v separately).
 
     The error allowed on every DOF is then ``rtol`` of the largest response, which is the
-    accuracy asked of the dominant harmonics. A tighter floor (``1e-3 rtol``, tried first)
-    made IDA resolve the quiet DOFs to round-off: 1.7x the steps on the gearbox variant
-    and a change between periods that stalled at 1.6e-4 instead of reaching 1e-5.
+    accuracy asked of the dominant harmonics; a tighter floor makes the integrator resolve
+    the quiet DOFs to round-off, in more steps and with a change between periods that
+    stalls above ``period_tol``.
 
     Solves ``A0(n) q_n = f_n`` for the load harmonics only (a few sparse LUs); falls back to
     ``|f| / |K_0|`` when a block is singular (an undamped resonance).
