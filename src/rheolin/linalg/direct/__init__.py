@@ -88,8 +88,8 @@ def available_backends() -> tuple[str, ...]:
 
 
 #: Envelope work (flops of a banded LU after reverse Cuthill-McKee) above which the
-#: factorization is costly enough for PARDISO's per-call overhead not to matter (a 1e4-DOF
-#: shaft chain: ~1e6; a 1e4-DOF plate: ~1e9; a 1e4-DOF solid: ~1e10).
+#: factorization is costly enough for PARDISO's per-call overhead not to matter (between the
+#: chains and the meshes whose envelope work bench/backends.py prints).
 CHEAP_WORK = 1e8
 
 
