@@ -9,10 +9,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import scipy.sparse as sp
 
-from .model import Coefficients, Detector, MassInverse, Series
 from .settings import DENSE_JAC_MAX
 
 if TYPE_CHECKING:
+    from .model import Coefficients, Detector, Series
     from .settings import TransientSettings
 
 __all__ = ["run_scipy", "run_sundae"]
@@ -24,7 +24,7 @@ def run_scipy(c: Coefficients, s: TransientSettings, det: Detector) -> dict[str,
     from scipy.integrate import BDF
 
     n = c.n
-    minv = MassInverse(c.M)
+    minv = c.mass_inverse()
 
     def fun(t: float, y: np.ndarray) -> np.ndarray:
         f = c.refresh(t)
@@ -134,7 +134,7 @@ def run_sundae(c: Coefficients, s: TransientSettings, det: Detector) -> dict[str
             max_num_steps=100000,
         )
     f0 = c.refresh(0.0)
-    yp0 = np.concatenate([np.zeros(n), MassInverse(c.M).solve(f0)])
+    yp0 = np.concatenate([np.zeros(n), c.mass_inverse().solve(f0)])
     init = solver.init_step(0.0, np.zeros(N), yp0)
     if not init.success:
         return {"failed": f"IDA could not start: {init.message}", "steps": 0}

@@ -123,6 +123,10 @@ class Coefficients:
                 s.refresh(b)
         return self.f0 + b @ self.f_table
 
+    def mass_inverse(self) -> MassInverse:
+        """``M(t)^-1`` at the time of the last refresh (raises :class:`SingularMass`)."""
+        return MassInverse(self.M)
+
 
 class MassInverse:
     """``M(t)^-1 x`` from one factorization of ``M_0`` and the Woodbury identity on the
