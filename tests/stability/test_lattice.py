@@ -608,7 +608,7 @@ def test_averaged_modes_from_the_modal_solve() -> None:
     f[0] = 1.0
     s = rl.PeriodicSystem(3.0, M={0: M}, D={0: D}, K={0: K, 1: Kk, -1: Kk}, f={1: f})
     sol = rl.solve(s, 12, backend="modal", method="gmres", stability=False)
-    assert sol.success and "_averaged_decomposition" in s.__dict__
+    assert sol.success and s.kept("averaged_decomposition") is not None
     avg = Averaged(s)
     state = np.block(
         [[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, D)]]
@@ -622,7 +622,7 @@ def test_averaged_modes_from_the_modal_solve() -> None:
     assert np.max(np.abs(Wh @ Ad - avg.lam[:, None] * (Wh @ Bd))) < 1e-10 * np.abs(Ad).max()
     assert np.max(np.abs(avg.WB @ avg.X - np.eye(2 * n))) < 1e-12
     with_modes = rl.floquet(s, method="lattice", order=3)
-    del s.__dict__["_averaged_decomposition"]
+    s.keep("averaged_decomposition", None)
     without = rl.floquet(s, method="lattice", order=3)
     assert with_modes.decided and with_modes.stable == without.stable
     assert abs(with_modes.max_real - without.max_real) <= 1e-9 * abs(without.max_real)

@@ -41,7 +41,7 @@ class Averaged:
         # cond(B) from the balanced mass block (B = diag(I, M))
         mu = np.linalg.svd(Ms, compute_uv=False) if n else np.ones(1)
         hi, lo = max(float(mu.max()), 1.0), min(float(mu.min()), 1.0)
-        known = system.__dict__.get("_averaged_decomposition")
+        known = system.kept("averaged_decomposition")
         if known is not None and lo > 0 and hi / lo <= STANDARD_COND and Ad.dtype == float:
             lam, X, W = _from_modal(known, sq, sv)
         elif lo > 0 and hi / lo <= STANDARD_COND:

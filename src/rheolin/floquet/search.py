@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ..harmonics.balance import coefficient_blocks
+from ..harmonics.blocks import coefficient_blocks
 from ..harmonics.hill_lattice import LatticeHill
 from ..harmonics.lattice import Lattice
 from ..system.periodic import PeriodicSystem

@@ -20,14 +20,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..system.periodic import PeriodicSystem
-from .balance import _Block, _Patterns, coefficient_blocks
+from .blocks import Block, Patterns, coefficient_blocks
 
 __all__ = ["LatticeHill"]
 
 
 #: Entry patterns of :class:`_Coupling`, by harmonics and block patterns (a sweep's speeds share
 #: them).
-_PATTERNS = _Patterns(8)
+_PATTERNS = Patterns(8)
 
 
 class _Coupling:
@@ -39,7 +39,7 @@ class _Coupling:
 
     def __init__(
         self,
-        blocks: dict[int, _Block],
+        blocks: dict[int, Block],
         row_h: np.ndarray,
         col_h: np.ndarray,
         n: int,
@@ -80,7 +80,7 @@ class _Coupling:
 
     def _pattern(
         self,
-        blocks: dict[int, _Block],
+        blocks: dict[int, Block],
         row_h: np.ndarray,
         col_h: np.ndarray,
         n: int,
