@@ -203,8 +203,8 @@ def test_free_rotation_of_a_gear_pair_on_stiff_supports_with_light_hubs(support:
 
     z1, z2, mod = 20, 50, 0.004
     m = Model()
-    m.add_rigid_body("p", (0, 0, 0), 1e-6, (1e-9, 1e-9, 2e-3))
-    m.add_rigid_body("g", (mod * (z1 + z2) / 2, 0, 0), 1e-6, (1e-9, 1e-9, 0.05))
+    m.add_rigid_body("p", (0, 0, 0), 1e-6, (1e-3, 1e-3, 2e-3))  # thin disks
+    m.add_rigid_body("g", (mod * (z1 + z2) / 2, 0, 0), 1e-6, (0.025, 0.025, 0.05))
     for body in ("p", "g"):
         m.add_bearing(f"{body}_b", body, 0, stiffness=support,
                       components=["ux", "uy", "uz", "phix", "phiy"])  # fmt: skip

@@ -131,15 +131,22 @@ def _stability_map(model: Any, speeds: np.ndarray, flag: bool | None) -> tuple[A
             f"the {kind} Hill problem needs an estimated {format_bytes(estimate)}, more than "
             f"the memory budget of {format_bytes(memory_budget())}"
         )
+    from ..system.rigid_modes import FreeBodyError
+
     columns = (TextColumn("{task.description}"), BarColumn(), TimeRemainingColumn())
     with Progress(*columns, console=err) as bar:
         task = bar.add_task("Floquet stability", total=len(speeds))
-        smap = map_fn(
-            model,
-            speeds,
-            refine=MAP_PRECISION,
-            progress=lambda i, r: bar.update(task, advance=1),
-        )
+        try:
+            smap = map_fn(
+                model,
+                speeds,
+                refine=MAP_PRECISION,
+                progress=lambda i, r: bar.update(task, advance=1),
+            )
+        except FreeBodyError as exc:  # a free body has modes, but no operating point
+            if flag:
+                raise
+            return None, str(exc)
     return smap, ""
 
 

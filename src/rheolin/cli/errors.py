@@ -32,7 +32,7 @@ try:  # typer >= 0.2x carries its own copy of click
 except ImportError:  # pragma: no cover - typer on the click package
     from click.exceptions import NoArgsIsHelpError, UsageError  # type: ignore[assignment]
 
-from ..budget import MemoryBudgetError
+from ..budget import MemoryBudgetError, check_settings, format_bytes, process_headroom
 from ..errors import ModelError
 from ..io.units import UnitError
 
@@ -140,6 +140,18 @@ def _internal(exc: BaseException) -> None:
     )
 
 
+def _out_of_memory(exc: BaseException) -> None:
+    """An allocation failed although the estimate fit: say so, with the limits that apply,
+    and what to lower (the input is too large for this process, not a bug)."""
+    room = ", ".join(f"{k} {format_bytes(v)}" for k, v in process_headroom().items())
+    plain_error(
+        "memory: the computation ran out of memory although its estimate fit the budget "
+        f"({type(exc).__name__}{': ' + str(exc) if str(exc) else ''}); room now: "
+        f"{room or 'unknown'}. Lower RHEOLIN_SOLVE_MEMORY / RHEOLIN_MEMORY_BUDGET, the "
+        "harmonic order or the model size"
+    )
+
+
 @contextlib.contextmanager
 def sigterm_as_interrupt() -> Iterator[None]:
     """SIGTERM (a batch system's stop) ends the command like Ctrl-C."""
@@ -168,6 +180,7 @@ class ContractGroup(TyperGroup):
 
     def invoke(self, ctx: Any) -> Any:
         try:
+            check_settings()  # the budget variables, before any work
             return super().invoke(ctx)
         except typer.Exit:
             raise
@@ -182,6 +195,12 @@ class ContractGroup(TyperGroup):
             exit_with(EXIT_INTERRUPTED)
         except USER_ERRORS as exc:
             plain_error(str(exc))
+            exit_with(EXIT_INPUT)
+        except MemoryError as exc:
+            _out_of_memory(exc)
+            exit_with(EXIT_INPUT)
+        except RecursionError as exc:  # input nested deeper than any model file needs
+            plain_error(f"input: nested too deeply to read ({exc})")
             exit_with(EXIT_INPUT)
         except Exception as exc:
             _internal(exc)

@@ -30,6 +30,10 @@ def validate(model: Path = MODEL) -> None:
     lm = load(model)
     m = lm.model
     info = preflight(lm, None, None, None, needs_load=False)
+    if m.bodies:  # what `run` needs too: every body held where only a support can hold it
+        from ..io.preflight import check_free_bodies
+
+        check_free_bodies(m.assemble(lm.spec.model.speed or 1.0).system)
     console.print(
         f"{model}: valid: {len(m.bodies)} bodies, {len(m.joints)} bearings/couplings, "
         f"{len(m.meshes)} gear meshes, {len(m.forces)} forces; w1 = "
@@ -43,11 +47,12 @@ def validate(model: Path = MODEL) -> None:
         except ModelError as exc:
             raise fail(f"{model}: {exc}") from None
         peak, (body, node) = op.max_displacement()
+        where = f" at {body} node {node}" if peak > 0 else ""
         console.print(
             f"preloaded: {len(m.rolling)} rolling bearings, {len(m.torques)} torques, "
             f"{sum(g.get('load_law') is not None for g in m.meshes.values())} load-dependent "
             f"meshes; static equilibrium found ({op.iterations} Newton iterations; largest "
-            f"deflection {peak * 1e6:.3g} um at {body} node {node})",
+            f"deflection {peak * 1e6:.3g} um{where})",
             markup=False,
         )
 

@@ -86,6 +86,9 @@ def run(
     summary["warnings"] = notes.messages
     if lm.model.preloaded:  # solved about it: the static equilibrium (cached)
         summary["operating_point"] = lm.model.operating_point(w).to_dict()
+        for note in summary["operating_point"]["notes"]:  # a torque the drive takes
+            if note not in notes.messages:
+                notes.messages.append(note)
     verdict = point_verdict(summary)
     with sigterm_as_interrupt(), staged_output(out_dir, RUN_FILES) as stage:
         write_dataset(ds, stage / "results.nc")

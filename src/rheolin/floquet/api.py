@@ -16,7 +16,7 @@ from ..budget import memory_budget as resolve_budget
 from ..harmonics.lattice import Lattice, harmonic_lattice, system_lattice
 from ..harmonics.sets import HarmonicSet, as_harmonic_set
 from ..system.periodic import PeriodicSystem
-from ..system.rigid_modes import find_rigid_modes
+from ..system.rigid_modes import held_rigid_modes as find_rigid_modes
 from .confirm import confirm_unresolved
 from .continuation import Continuation
 from .dense import floquet_dense

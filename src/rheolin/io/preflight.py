@@ -7,6 +7,8 @@ before it computes anything:
 * the model assembles at the operating speed (gear geometry, bearing frames, condensed
   matrices; each error names its field);
 * the time-averaged mass matrix has no negative direction (positive semidefinite);
+* no body is free in a direction that only a support can hold (a shaft without lateral
+  bearings has no steady state; a drive train's rotation and axial position are held);
 * the harmonic set that ``[harmonics]`` (or ``--harmonics``/``--max-order``) asks for, times
   the degrees of freedom, fits the memory budget: the closure is grown with a size limit and
   refused with the estimate (``MemoryBudgetError``) before it can exhaust the machine.
@@ -29,7 +31,7 @@ import numpy as np
 from ..budget import MemoryBudgetError, format_bytes, solve_budget
 from ..errors import ModelError
 
-__all__ = ["VECTORS_PER_HARMONIC", "Preflight", "preflight"]
+__all__ = ["VECTORS_PER_HARMONIC", "Preflight", "check_free_bodies", "preflight"]
 
 #: Complex vectors per harmonic and DOF that any solve holds at least (load, solution,
 #: residual and a few Krylov vectors): the floor of the memory estimate of a harmonic set.
@@ -80,6 +82,8 @@ def preflight(
     a = lm.model.assemble(float(speed) if speed else CHECK_SPEED)
     system = a.system
     _check_mass(system)
+    if needs_load:  # a steady state needs every body held; a Campbell diagram does not
+        check_free_bodies(system)
     n = int(system.n)
     per_harmonic = VECTORS_PER_HARMONIC * 16 * n
     limit = solve_budget() if budget is None else int(budget)
@@ -116,6 +120,18 @@ def preflight(
     except ValueError as exc:
         raise ModelError(f"harmonics: {exc}") from None
     return Preflight(n, len(hset), len(hset) * per_harmonic)
+
+
+def check_free_bodies(system: Any) -> None:
+    """No body has a rigid motion that nothing holds but the drive's spin and axial position
+    (:func:`~rheolin.system.rigid_modes.held_rigid_modes`; the search costs one dense
+    eigendecomposition, so models above its dense size are checked by the solve itself)."""
+    from ..system.rigid_modes import DENSE_LIMIT, held_rigid_modes
+
+    if system.constraint is not None:
+        system = system.constraint.reduce(system)
+    if system.n <= DENSE_LIMIT:
+        held_rigid_modes(system)
 
 
 def _check_mass(system: Any) -> None:

@@ -37,7 +37,7 @@ from .joints import bearing_record, link_components
 from .loads import gravity_vector, moment_at_node, torque_value
 from .preload import OperatingPoint, preloaded_template
 from .preload import operating_point as solve_operating_point
-from .rigid import RigidNode, disk_node
+from .rigid import disk_node, given_node
 from .rolling import rolling_record
 from .rotation import unit_axis
 from .sections import Section
@@ -225,7 +225,7 @@ class Model(ModelData):
         e = unit_axis(axis, "axis")
         pts = np.asarray(position, float).reshape(1, 3)
         ratio = None if speed_ratio is None else Fraction(speed_ratio)
-        rigid = RigidNode(mass, np.asarray(inertia, dtype=float))
+        rigid = given_node(mass, inertia)
         self.bodies[name] = Body(name, "rigid", e, pts, ratio, disks={0: rigid})
 
     @recorded

@@ -238,4 +238,10 @@ def layer_elements(kind: str, shaft: str, n_el: int, elements: Any) -> list[int]
     idx = [int(i) for i in np.atleast_1d(np.asarray(elements)).ravel()]
     if not idx or any(not 0 <= i < n_el for i in idx):
         raise ModelError(f"`elements` must be element indices in [0, {n_el}), got {elements!r}")
+    twice = sorted({i for i in idx if idx.count(i) > 1})
+    if twice:
+        raise ModelError(
+            f"`elements`: element {twice[0]} is listed more than once; a layer covers a set of "
+            "elements (add a second layer for a second sleeve)"
+        )
     return idx

@@ -19,6 +19,7 @@ import scipy.sparse as sp
 
 from ..errors import ModelError
 from ..system.constraints import LinearConstraint
+from ..system.motions import Motions
 from ..system.periodic import PeriodicSystem
 from ._term import SpeedTerm, Term
 from .assembly import Assembled
@@ -144,6 +145,7 @@ class SpeedTemplate:
         dof = {key: 6 * v + np.arange(6) for key, v in self.node_index.items()}
         self.constraint = _links(model, dof, self.n_dof)
         self.whirl_pairs = _planes(model, dof)
+        self.motions = _motions(model, dof, self.dof_labels)
         terms = self._body_terms(model)
         self.joints: dict[str, SpeedTerm] = {}
         #: speed-dependent joints: name -> (table, |speed ratio| of its body, DOFs)
@@ -317,6 +319,7 @@ class SpeedTemplate:
             constraint=self.constraint,
         )
         system.whirl_pairs = self.whirl_pairs
+        system.motions = self.motions
         return system
 
     def assemble(self, speed: float) -> Assembled:
@@ -375,6 +378,21 @@ def _planes(
     if not ix:
         return None
     return np.array(ix, dtype=np.int64), np.array(iy, dtype=np.int64)
+
+
+def _motions(
+    model: ModelData, dof: dict[tuple[str, int], np.ndarray], labels: list[tuple[str, int, str]]
+) -> Motions:
+    """Each body's rigid motions (its axis, its nodes), for the solvers to tell the motions a
+    steady state may hold (spin and axial) from those nothing holds (:mod:`rheolin.system.
+    motions`)."""
+    return Motions.of_bodies(
+        {
+            b.name: (b.axis, b.positions, [dof[(b.name, i)] for i in range(len(b.positions))])
+            for b in model.bodies.values()
+        },
+        labels,
+    )
 
 
 def _links(

@@ -14,7 +14,8 @@ from ..floquet import Continuation, dense_stability_harmonics, floquet, floquet_
 from ..harmonics.balance import HarmonicBalance, SingularBlockError
 from ..harmonics.sets import HarmonicSet, as_harmonic_set
 from ..system.periodic import PeriodicSystem
-from ..system.rigid_modes import RigidModes, find_rigid_modes
+from ..system.rigid_modes import RigidModes
+from ..system.rigid_modes import held_rigid_modes as find_rigid_modes
 from . import direct, krylov, lti, perturbation, transient  # noqa: F401  (register the methods)
 from .registry import METHODS, RESIDUAL_CHECKED, Options, SolverOutcome
 from .solution import Solution
