@@ -131,7 +131,9 @@ def _read_number(path: Path) -> int | None:
 _CGROUP_UNLIMITED = 2**60
 
 
-def _cgroup_room(root: Path = Path("/sys/fs/cgroup")) -> int | None:
+def _cgroup_room(
+    root: Path = Path("/sys/fs/cgroup"), listing: Path = Path("/proc/self/cgroup")
+) -> int | None:
     """Room left under the process's control-group memory limit [bytes], or None.
 
     cgroup v2: ``memory.max`` minus ``memory.current`` of the process's group (and of each
@@ -139,7 +141,7 @@ def _cgroup_room(root: Path = Path("/sys/fs/cgroup")) -> int | None:
     ``memory.usage_in_bytes``.
     """
     try:
-        lines = Path("/proc/self/cgroup").read_text().splitlines()
+        lines = listing.read_text().splitlines()
     except OSError:
         return None
     rooms: list[int] = []

@@ -204,3 +204,25 @@ def test_condense_specs_with_impossible_or_repeated_entries_are_refused(
     _fe_spec(tmp_path, **change)
     _refused(invoke("condense", tmp_path / "spec.toml", "--out", tmp_path / "b.npz"), *needles)
     assert not (tmp_path / "b.npz").exists()
+
+
+def test_two_sided_joint_with_offsets_on_both_sides_assembles_to_the_lever_closed_form():
+    """Found by H2: ``offset`` and ``other_offset`` together crashed the assembly (the levers
+    were compared with ``== (None, None)``). Body ``a`` clamped, body ``b`` held only by the
+    joint, both attached at z = 0.1 m (``b``'s node at z = 0.2): a force ``F`` along x on
+    ``b`` deflects the attachment by ``F / k`` and tilts ``b`` by ``0.1 F / k_r``, so ``b``'s
+    node moves ``F / k + 0.01 F / k_r``."""
+    k, kr, F = 2e6, 3e4, 50.0
+    m = rl.Model()
+    m.add_rigid_body("a", (0, 0, 0), 1.0, (1, 1, 1))
+    m.add_rigid_body("b", (0, 0, 0.2), 1.0, (1, 1, 1))
+    m.add_bearing("clamp", "a", 0, stiffness=1e14, components=None)
+    m.add_bearing("j", "a", 0, stiffness=[k, k, k, kr, kr, kr], components=None,
+                  other_body="b", other_node=0, offset=(0, 0, 0.1),
+                  other_offset=(0, 0, -0.1))  # fmt: skip
+    m.add_force("f", "b", 0, force=(F, 0, 0))
+    a = m.assemble(1.0)
+    u = np.linalg.solve(a.system.K[0].toarray(), np.real(a.system.f[0]))
+    ub = u[a.dofs("b", 0)]
+    assert ub[0] == pytest.approx(F / k + 0.01 * F / kr, rel=1e-9)
+    assert ub[4] == pytest.approx(0.1 * F / kr, rel=1e-9)

@@ -11,7 +11,7 @@ from rich.markup import escape
 
 from .. import __version__
 from ..errors import ModelError
-from .common import MODEL, console, fail, load, output_dir, preflight
+from .common import MODEL, console, fail, load, output_dir
 
 __all__ = ["example", "register", "validate", "version"]
 
@@ -29,11 +29,10 @@ def validate(model: Path = MODEL) -> None:
     """Check a model file; exit 0 if valid, 2 with the field paths of every problem if not."""
     lm = load(model)
     m = lm.model
-    info = preflight(lm, None, None, None, needs_load=False)
-    if m.bodies:  # what `run` needs too: every body held where only a support can hold it
-        from ..io.preflight import check_free_bodies
+    from ..io.preflight import preflight as check
 
-        check_free_bodies(m.assemble(lm.spec.model.speed or 1.0).system)
+    # what `run` needs too: every body held where only a support can hold it
+    info = check(lm, None, needs_load=False, free_bodies=True)
     console.print(
         f"{model}: valid: {len(m.bodies)} bodies, {len(m.joints)} bearings/couplings, "
         f"{len(m.meshes)} gear meshes, {len(m.forces)} forces; w1 = "

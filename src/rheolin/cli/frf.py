@@ -54,7 +54,8 @@ def frf(
 ) -> None:
     """Frequency response at a fixed speed (non-synchronous excitation): DIR/frf.nc and
     DIR/bode.png; the resonance peaks printed with their half-power amplification factors."""
-    from ..budget import format_bytes, memory_budget
+    from ..budget import MemoryBudgetError, format_bytes, memory_budget
+    from ..errors import ModelError
     from ..floquet import floquet, floquet_memory
     from ..io.outdir import staged_output
     from ..plots.frf import plot_bode
@@ -79,9 +80,16 @@ def frf(
     set_kept(f"nothing written; {out_dir} is unchanged")
     with sigterm_as_interrupt():
         with err.status(f"frequency response over {w.size} frequencies"):
-            res = frequency_response(
-                lm.model, w_speed, w, inputs, outputs or None, order=order, unbalance=unbalance
-            )
+            try:
+                res = frequency_response(
+                    lm.model, w_speed, w, inputs, outputs or None, order=order,
+                    unbalance=unbalance,
+                )  # fmt: skip
+            except (ModelError, MemoryBudgetError) as exc:  # the lattice's size, before it is built
+                text = str(exc)
+                if text.startswith("order: "):
+                    raise type(exc)("--order: " + text.removeprefix("order: ")) from None
+                raise
         verdict, why = None, ""
         if flag is not False:
             kind, estimate = floquet_memory(assembled.system)

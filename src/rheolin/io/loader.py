@@ -22,6 +22,7 @@ from .schema import ModelFile, field_path, table_class
 
 __all__ = [
     "LoadedModel",
+    "check_size",
     "load_model",
     "parse_document",
     "parse_model",
@@ -94,8 +95,43 @@ def parse_document(
         raise ModelError(_format(exc, source)) from None
     except RecursionError:
         raise ModelError(f"{source}: a value is nested too deeply to check") from None
+    check_size(spec, source)
     model = build_model(spec, Path(base) if base is not None else Path.cwd())
     return LoadedModel(model, spec, sha256, source)
+
+
+#: Memory of one shaft element once assembled (its Timoshenko matrices rotated into Fourier
+#: coefficients, with the template that evaluates them at any speed): about 40 kB measured
+#: (``bench/fuzz.py``), taken with room for the peak of the assembly.
+ASSEMBLY_BYTES_PER_ELEMENT = 64_000
+
+
+def check_size(spec: ModelFile, source: str = "<document>") -> None:
+    """Refuse a model too large to assemble within the memory budget
+    (:func:`rheolin.budget.memory_budget`), from the element count of its shafts, before
+    anything is built: a :class:`~rheolin.budget.MemoryBudgetError` naming the largest shaft.
+
+    >>> import tomllib
+    >>> from rheolin.data import example_text
+    >>> check_size(ModelFile.model_validate(tomllib.loads(example_text("rotor"))))
+    """
+    from ..budget import MemoryBudgetError, format_bytes, memory_budget
+
+    counts = [
+        (f"shafts[{i}].positions", len(b.positions) - 1 + sum(len(x.elements) for x in b.layers))
+        for i, b in enumerate(spec.shafts)
+    ]
+    total = sum(c for _, c in counts)
+    need = total * ASSEMBLY_BYTES_PER_ELEMENT
+    if not counts or need <= (limit := memory_budget()):
+        return
+    where, largest = max(counts, key=lambda x: x[1])
+    raise MemoryBudgetError(
+        f"{where}: {total:,} shaft elements ({largest:,} on this shaft) need an estimated "
+        f"{format_bytes(need)} to assemble, more than the memory budget of "
+        f"{format_bytes(limit)}: use fewer nodes (a few per diameter step, disk and bearing "
+        "suffice for the modes below a few kHz) or raise RHEOLIN_MEMORY_BUDGET"
+    )
 
 
 def read_toml(data: bytes | str, source: str) -> dict[str, Any]:

@@ -67,12 +67,15 @@ def preflight(
     max_order: float | None = None,
     budget: int | None = None,
     needs_load: bool = True,
+    free_bodies: bool | None = None,
 ) -> Preflight:
     """Check a loaded model (:class:`~rheolin.io.LoadedModel`) at the first of ``speeds``
     (default: the file's ``model.speed``) with the harmonic settings ``order``/``max_order``
     (default: the file's); raise :class:`~rheolin.ModelError` or
     :class:`~rheolin.budget.MemoryBudgetError` naming the field. ``needs_load=False`` (a
-    Campbell diagram) accepts a model without loads."""
+    Campbell diagram) accepts a model without loads; ``free_bodies`` (default:
+    ``needs_load``) refuses a body that only a support could hold and nothing holds
+    (:func:`check_free_bodies`: a steady state needs it held)."""
     from ..harmonics.sets import HarmonicSet
 
     h = lm.spec.harmonics
@@ -82,7 +85,7 @@ def preflight(
     a = lm.model.assemble(float(speed) if speed else CHECK_SPEED)
     system = a.system
     _check_mass(system)
-    if needs_load:  # a steady state needs every body held; a Campbell diagram does not
+    if needs_load if free_bodies is None else free_bodies:  # a Campbell diagram needs not
         check_free_bodies(system)
     n = int(system.n)
     per_harmonic = VECTORS_PER_HARMONIC * 16 * n

@@ -11,7 +11,8 @@ a line search on ``|r|`` sees no descent. This method therefore
 1. takes the Newton direction ``d = -(J + mu S)^-1 r`` (``S`` the reference stiffness of
    the linear part and of every joint: nonsingular once the free rigid-body motions are
    held), with ``mu = 0`` where ``J`` is regular and growing until ``d`` descends
-   (``d^T r < 0``);
+   (``d^T r < 0``) and stays within a plausible deflection (a larger step comes from a
+   nearly singular tangent, and its direction from round-off);
 2. searches along ``d`` for the minimum of the energy, the root of the directional
    derivative ``g(a) = d^T r(y + a d)`` (nondecreasing for a monotone ``r``): the full
    Newton step when it reduces ``|W r|``, else a bracket grown by factors of 4 and
@@ -118,7 +119,9 @@ def minimize(
         step = None
         for mu in _MU:
             d = _factor_solve(J if mu == 0.0 else J + mu * S, r)
-            if d is not None and float(d @ r) < 0.0:
+            # a step past any plausible deflection comes from a (nearly) singular tangent:
+            # its direction is round-off, so it is regularized further
+            if d is not None and float(d @ r) < 0.0 and not too_far(y + d):
                 step = (mu, d)
                 break
         if step is None:
