@@ -62,7 +62,11 @@ def parse_bytes(text: str | int | float) -> int:
         if not 0 < text <= 2.0**63:
             raise ValueError(f"a memory size must be positive and finite, got {text!r}")
         return int(text)
-    m = re.fullmatch(r"\s*([+-]?[0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([A-Za-z]*)\s*", str(text))
+    if not isinstance(text, str):
+        raise TypeError(
+            f"a memory size is a number of bytes or a text like '4 GB', got {text!r:.60}"
+        )
+    m = re.fullmatch(r"\s*([+-]?[0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([A-Za-z]*)\s*", text)
     if not m or m.group(2).lower() not in _UNITS:
         raise ValueError(
             f"cannot read a memory size from {text!r}: use a number of bytes or a value with "

@@ -226,3 +226,22 @@ def test_two_sided_joint_with_offsets_on_both_sides_assembles_to_the_lever_close
     ub = u[a.dofs("b", 0)]
     assert ub[0] == pytest.approx(F / k + 0.01 * F / kr, rel=1e-9)
     assert ub[4] == pytest.approx(0.1 * F / kr, rel=1e-9)
+
+
+def test_two_torques_at_one_node_add():
+    """Loads superpose (docs/model-format.md): 30 and 70 N m on the pinion of an external
+    20:50 pair are balanced by the reaction ``(30 + 70) z2 / z1`` about the gear's own axis
+    (power: ``T_p W_p + T_g W_g = 0`` with ``W_g = -W_p z1 / z2``)."""
+    z1, z2, mod = 20, 50, 0.004
+    m = rl.Model()
+    m.add_rigid_body("p", (0, 0, 0), 1.0, (1e-3, 1e-3, 2e-3))
+    m.add_rigid_body("g", (mod * (z1 + z2) / 2, 0, 0), 3.0, (0.01, 0.01, 0.02))
+    for b in ("p", "g"):
+        m.add_bearing(f"{b}b", b, 0, stiffness=1e9, components=["ux", "uy", "uz", "phix", "phiy"])
+    m.add_gear_mesh("m", "p", 0, "g", 0, z1, z2, mod, stiffness=4e8)
+    m.add_torque("a", "p", 0, 30.0)
+    m.add_torque("b", "p", 0, 70.0)
+    m.add_torque("out", "g", 0, "reaction")
+    op = m.operating_point(1.0)
+    assert op.torques["out"] == pytest.approx(100.0 * z2 / z1, rel=1e-10)
+    assert op.notes() == []

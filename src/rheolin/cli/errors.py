@@ -6,7 +6,9 @@
 * an internal error (a bug) prints one short line and exits with :data:`EXIT_INTERNAL` (3);
   ``rheolin --debug ...`` (or ``RHEOLIN_DEBUG=1``) adds the traceback;
 * Ctrl-C (or SIGTERM) stops the command, says what was kept and exits with
-  :data:`EXIT_INTERRUPTED` (130).
+  :data:`EXIT_INTERRUPTED` (130);
+* a closed standard output (``rheolin ... | head``) ends the command quietly with
+  :data:`EXIT_FAILED` (1), as Python's documentation advises for a broken pipe.
 
 The contract lives in :class:`ContractGroup` (the click group behind ``rheolin``), so it holds
 for ``python -m rheolin.cli``, the ``rheolin`` script and ``typer.testing.CliRunner`` alike.
@@ -140,6 +142,16 @@ def _internal(exc: BaseException) -> None:
     )
 
 
+def _quiet_stdout() -> None:
+    """Point stdout at /dev/null, so that flushing it at exit does not fail again (the
+    Python documentation's advice for SIGPIPE)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # a stdout without a file (CliRunner)
+        pass
+
+
 def _out_of_memory(exc: BaseException) -> None:
     """An allocation failed although the estimate fit: say so, with the limits that apply,
     and what to lower (the input is too large for this process, not a bug)."""
@@ -190,6 +202,9 @@ class ContractGroup(TyperGroup):
             where = exc.ctx.command_path if exc.ctx is not None else "rheolin"
             plain_error(f"{where}: {exc.format_message()} (see `{where} --help`)")
             exit_with(EXIT_INPUT)
+        except BrokenPipeError:  # the reader of stdout went away (`rheolin ... | head`)
+            _quiet_stdout()
+            exit_with(EXIT_FAILED)
         except (KeyboardInterrupt, typer.Abort):
             _interrupted()
             exit_with(EXIT_INTERRUPTED)

@@ -124,6 +124,8 @@ def frf(
             if not np.any(np.isfinite(mag)) or np.nanmax(mag) == 0:
                 continue
             top = float(np.nanmax(mag))
+            if w.size < 3:  # a peak needs a frequency on each side
+                continue
             for p in amplification_factors(w, np.nan_to_num(mag)):
                 if p.amplitude < PEAK_SHARE * top:
                     continue  # a ripple of the curve, not a resonance of this pair

@@ -100,9 +100,8 @@ def parse_document(
     return LoadedModel(model, spec, sha256, source)
 
 
-#: Memory of one shaft element once assembled (its Timoshenko matrices rotated into Fourier
-#: coefficients, with the template that evaluates them at any speed): about 40 kB measured
-#: (``bench/fuzz.py``), taken with room for the peak of the assembly.
+#: Memory of one shaft element at the peak of its assembly (its Timoshenko matrices rotated
+#: into Fourier coefficients; about 54 kB measured by ``bench/fuzz.py``), with some room.
 ASSEMBLY_BYTES_PER_ELEMENT = 64_000
 
 

@@ -539,7 +539,7 @@ class Model(ModelData):
         self.forces[name] = dict(
             body=body,
             node=node,
-            force=force,
+            force=[float(x) for x in force],
             moment=moment_at_node(force, moment, offset),
             order=Fraction(order),
             phase=float(phase),

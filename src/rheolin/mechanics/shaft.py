@@ -68,7 +68,8 @@ def circular_layer(
     vals = (float(outer), float(inner), float(o_r), float(i_r))
     if not all(np.isfinite(vals)) or not (0 <= vals[1] < vals[0] and 0 <= vals[3] < vals[2]):
         raise ModelError(
-            "shaft diameters: need 0 <= inner < outer at both ends, got outer/inner "
+            "`outer_diameter`, `inner_diameter`: need 0 <= inner < outer at both ends, got "
+            "outer/inner "
             f"left {vals[0]!r}/{vals[1]!r}, right {vals[2]!r}/{vals[3]!r}"
         )
     if vals[0] == vals[2] and vals[1] == vals[3]:

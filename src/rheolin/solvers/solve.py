@@ -131,6 +131,7 @@ def solve(
     """
     if not isinstance(system, PeriodicSystem):
         raise TypeError(f"`system` must be a PeriodicSystem, got {type(system).__name__}")
+    _check_arguments(maxiter, method, memory_budget, backend, sparse_backend)
     _check_size(system, harmonics, memory_budget)  # before the set is even built
     hset = as_harmonic_set(harmonics)
     _check_loads(system, hset)
@@ -181,6 +182,26 @@ def solve(
         if rigid is not None:
             return _constrained(system, rigid, hset, x0, again)
     return _check_stability(system, sol, stability, continuation)
+
+
+def _check_arguments(
+    maxiter: Any, method: Any, budget: Any, backend: Any, sparse_backend: Any
+) -> None:
+    """The options a user types, each refused by name (before any conversion fails)."""
+    if maxiter is not None:
+        ok = isinstance(maxiter, int | np.integer) and not isinstance(maxiter, bool)
+        if not ok or int(maxiter) < 1:
+            raise ValueError(f"`maxiter` must be a positive integer, got {maxiter!r:.80}")
+    if not isinstance(method, str):
+        raise ValueError(f"`method` must be a method name (a str), got {method!r:.80}")
+    for name, value in (("backend", backend), ("sparse_backend", sparse_backend)):
+        if not isinstance(value, str):
+            raise ValueError(f"`{name}` must be a backend name (a str), got {value!r:.80}")
+    if budget is not None:
+        try:
+            solve_budget(budget)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"`memory_budget`: {exc}") from None
 
 
 def _check_size(system: PeriodicSystem, harmonics: Any, budget: str | int | None) -> None:
@@ -298,7 +319,12 @@ def _initial_guess(op: HarmonicBalance, x0: Solution | np.ndarray | None) -> np.
             if int(n) in where:
                 out[i] = x0.q[where[int(n)]]
         return out
-    arr = np.asarray(x0, dtype=complex)
+    try:
+        arr = np.asarray(x0, dtype=complex)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"`x0` must be a Solution or an array of coefficients, got {x0!r:.80}"
+        ) from None
     if arr.shape != (op.full.size, op.n_dof):
         raise ValueError(
             f"`x0` must have shape ({op.full.size}, {op.n_dof}) (harmonics x DOFs), got {arr.shape}"

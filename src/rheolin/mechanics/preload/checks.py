@@ -210,7 +210,7 @@ def held_loads(
     for k in range(R.shape[1]):
         r = R[:, k]
         total = float(r @ f0)
-        if total == 0.0:
+        if abs(total) <= 1e-9 * float(np.abs(r) @ np.abs(f0)):  # balanced, to round-off
             continue
         best, amount, unit, what = "", 0.0, "", ""
         for b in model.bodies.values():
