@@ -100,7 +100,8 @@ def cli_case(draw: st.DrawFn) -> tuple[str, list[str], dict[str, str]]:
             args += ["--count", draw(NUMBERS)]
     elif kind == "sweep":
         args = ["sweep", "{model}", "--speeds", draw(st.sampled_from(["1000,2000rpm", "0rpm"]))]
-        args += ["--workers", "1", "--no-plots", "--stability", "off", "--no-stability-map"]
+        args += ["--workers", "1", "--stability", "off", "--no-stability-map"]
+        args += draw(st.sampled_from([["--no-plots"], ["--no-plots"], []]))
         for _ in range(draw(st.integers(1, 2))):
             args += ["--vary", draw(st.one_of(GOOD_VARY, VARY))]
     elif kind == "condense":

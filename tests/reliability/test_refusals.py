@@ -245,3 +245,19 @@ def test_two_torques_at_one_node_add():
     op = m.operating_point(1.0)
     assert op.torques["out"] == pytest.approx(100.0 * z2 / z1, rel=1e-10)
     assert op.notes() == []
+
+
+def test_a_sweep_whose_every_point_fails_ends_honestly_with_its_files(invoke, rotor, tmp_path):
+    """Every value leaves the free end without lateral support: each point fails (the
+    message says why in sweep.json); the plots have nothing to draw. Exit 1, not 3."""
+    import json
+
+    res = invoke(
+        "sweep", rotor, "--speeds", "1000,2000rpm", "--workers", "1", "--stability", "off",
+        "--vary", "bearings.free_end.stiffness=0,1e-20 N/m", "--out", tmp_path / "s",
+    )  # fmt: skip
+    assert res.exit_code == 1, res.stderr
+    assert "internal error" not in res.stderr
+    table = json.loads((tmp_path / "s" / "sweep.json").read_text())
+    assert not any(np.ravel(table["success"]))
+    assert "no steady state" in json.dumps(table)
