@@ -26,6 +26,7 @@ import inspect
 import json
 import os
 import re
+import resource
 import shlex
 import signal
 import subprocess
@@ -173,7 +174,8 @@ def driver(plan: list[dict[str, Any]], rheolin: str) -> None:
     namespace: dict[str, Any] = {"__name__": "__main__"}
     env = dict(os.environ, PATH=f"{Path(rheolin).parent}{os.pathsep}{os.environ['PATH']}")
     for step in plan:
-        print(f"--- {step['where']}", flush=True)
+        cpu = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+        print(f"--- {step['where']} (CPU so far {sum(r.ru_utime + r.ru_stime for r in cpu):.1f} s)")
         if step["kind"] == "python":
             code = "\n" * (step["line"] - 1) + step["code"]  # tracebacks point at the doc line
             exec(compile(code, step["where"].split(":")[0], "exec"), namespace)
