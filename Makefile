@@ -19,8 +19,8 @@ demo: $(STAMP)
 		--out demo_results/sweep
 
 lint: $(STAMP)
-	$(BIN)/ruff check src tests bench docs
-	$(BIN)/ruff format --check src tests bench docs
+	$(BIN)/ruff check src tests bench docs/figures.py
+	$(BIN)/ruff format --check src tests bench docs/figures.py
 
 typecheck: $(STAMP)
 	$(BIN)/mypy src
