@@ -134,7 +134,7 @@ def solve(
     _check_arguments(maxiter, method, memory_budget, backend, sparse_backend)
     _check_size(system, harmonics, memory_budget)  # before the set is even built
     hset = as_harmonic_set(harmonics)
-    _check_loads(system, hset)
+    _check_loads(system, hset, warn=not isinstance(harmonics, HarmonicSet))
     if not (isinstance(rtol, int | float) and 0.0 < rtol < 1.0):
         raise ValueError(f"`rtol` must be a number in (0, 1), got {rtol!r}")
     if maxiter is not None and (isinstance(maxiter, bool) or int(maxiter) < 1):
@@ -229,9 +229,10 @@ def _check_size(system: PeriodicSystem, harmonics: Any, budget: str | int | None
         raise MemoryBudgetError(f"`harmonics`: {exc}") from None
 
 
-def _check_loads(system: PeriodicSystem, hset: HarmonicSet) -> None:
+def _check_loads(system: PeriodicSystem, hset: HarmonicSet, warn: bool) -> None:
     """Refuse a harmonic set that leaves out every load harmonic (its answer would be q = 0
-    whatever the model), and warn when it leaves out some."""
+    whatever the model), and warn (``warn``: a set given as numbers; a closure says what its
+    cut-off leaves out itself) when it leaves out some."""
     loads = [int(k) for k in system.load_harmonics]
     if not loads:
         return
@@ -243,7 +244,7 @@ def _check_loads(system: PeriodicSystem, hset: HarmonicSet) -> None:
             "response would be zero whatever the model; include them (e.g. "
             "HarmonicSet.closure(system, order))"
         )
-    if missing:
+    if missing and warn:
         warnings.warn(
             f"the harmonic set leaves out {len(missing)} of {len(loads)} load harmonics "
             f"({_short(missing)}): their response is not computed",
