@@ -4,23 +4,20 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import warnings
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 import numpy as np
 
-from ..budget import MemoryBudgetError, format_bytes, memory_budget, solve_budget
-from ..errors import ModelError
+from ..budget import format_bytes, memory_budget
 from ..floquet import Continuation, dense_stability_harmonics, floquet, floquet_memory
 from ..harmonics.balance import HarmonicBalance, SingularBlockError
-from ..harmonics.sets import HarmonicSet, TruncationWarning, as_harmonic_set
-from ..linalg.memory import SolveMemory
-from ..linalg.memory import check as check_memory
+from ..harmonics.sets import HarmonicSet, as_harmonic_set
 from ..system.periodic import PeriodicSystem
 from ..system.rigid_modes import RigidModes
 from ..system.rigid_modes import held_rigid_modes as find_rigid_modes
 from . import direct, krylov, lti, perturbation, transient  # noqa: F401  (register the methods)
+from .arguments import check_arguments, check_loads, check_size
 from .registry import METHODS, RESIDUAL_CHECKED, Options, SolverOutcome
 from .solution import Solution
 
@@ -131,10 +128,10 @@ def solve(
     """
     if not isinstance(system, PeriodicSystem):
         raise TypeError(f"`system` must be a PeriodicSystem, got {type(system).__name__}")
-    _check_arguments(maxiter, method, memory_budget, backend, sparse_backend)
-    _check_size(system, harmonics, memory_budget)  # before the set is even built
+    check_arguments(maxiter, method, memory_budget, backend, sparse_backend)
+    check_size(system, harmonics, memory_budget)  # before the set is even built
     hset = as_harmonic_set(harmonics)
-    _check_loads(system, hset, warn=not isinstance(harmonics, HarmonicSet))
+    check_loads(system, hset, warn=not isinstance(harmonics, HarmonicSet))
     if not (isinstance(rtol, int | float) and 0.0 < rtol < 1.0):
         raise ValueError(f"`rtol` must be a number in (0, 1), got {rtol!r}")
     if maxiter is not None and (isinstance(maxiter, bool) or int(maxiter) < 1):
@@ -182,80 +179,6 @@ def solve(
         if rigid is not None:
             return _constrained(system, rigid, hset, x0, again)
     return _check_stability(system, sol, stability, continuation)
-
-
-def _check_arguments(
-    maxiter: Any, method: Any, budget: Any, backend: Any, sparse_backend: Any
-) -> None:
-    """The options a user types, each refused by name (before any conversion fails)."""
-    if maxiter is not None:
-        ok = isinstance(maxiter, int | np.integer) and not isinstance(maxiter, bool)
-        if not ok or int(maxiter) < 1:
-            raise ValueError(f"`maxiter` must be a positive integer, got {maxiter!r:.80}")
-    if not isinstance(method, str):
-        raise ValueError(f"`method` must be a method name (a str), got {method!r:.80}")
-    for name, value in (("backend", backend), ("sparse_backend", sparse_backend)):
-        if not isinstance(value, str):
-            raise ValueError(f"`{name}` must be a backend name (a str), got {value!r:.80}")
-    if budget is not None:
-        try:
-            solve_budget(budget)
-        except (TypeError, ValueError) as exc:
-            raise ValueError(f"`memory_budget`: {exc}") from None
-
-
-def _check_size(system: PeriodicSystem, harmonics: Any, budget: str | int | None) -> None:
-    """Refuse a harmonic set whose size alone takes the solve past its memory budget (the
-    operator's estimate without the factors, :class:`~rheolin.linalg.memory.SolveMemory`),
-    from its count (an int ``N``: ``N + 1`` harmonics ``n >= 0``), before it is built."""
-    if isinstance(harmonics, int | np.integer) and not isinstance(harmonics, bool):
-        if int(harmonics) < 0:
-            raise ValueError(f"`harmonics` must be >= 0, got {harmonics!r}")
-        half = int(harmonics) + 1
-    else:
-        try:
-            half = len(harmonics) // 2 + 1
-        except TypeError:  # an iterator: built and checked by the operator's estimate
-            return
-    touched = np.zeros(system.n, bool)  # the support of the time variation
-    for name in ("M", "D", "K"):
-        for k, X in getattr(system, name).items():
-            if k:
-                touched[np.flatnonzero(np.abs(X).sum(axis=1))] = True
-    memory = SolveMemory(system.n, half, int(touched.sum()))
-    try:
-        check_memory(memory, solve_budget(budget))
-    except MemoryBudgetError as exc:
-        raise MemoryBudgetError(f"`harmonics`: {exc}") from None
-
-
-def _check_loads(system: PeriodicSystem, hset: HarmonicSet, warn: bool) -> None:
-    """Refuse a harmonic set that leaves out every load harmonic (its answer would be q = 0
-    whatever the model), and warn (``warn``: a set given as numbers; a closure says what its
-    cut-off leaves out itself) when it leaves out some."""
-    loads = [int(k) for k in system.load_harmonics]
-    if not loads:
-        return
-    have = set(int(k) for k in hset.indices)
-    missing = [k for k in loads if k not in have]
-    if len(missing) == len(loads):
-        raise ModelError(
-            f"`harmonics`: the set leaves out every load harmonic ({_short(loads)}): the "
-            "response would be zero whatever the model; include them (e.g. "
-            "HarmonicSet.closure(system, order))"
-        )
-    if missing and warn:
-        warnings.warn(
-            f"the harmonic set leaves out {len(missing)} of {len(loads)} load harmonics "
-            f"({_short(missing)}): their response is not computed",
-            TruncationWarning,
-            stacklevel=3,
-        )
-
-
-def _short(values: list[int], head: int = 6) -> str:
-    shown = ", ".join(str(v) for v in values[:head])
-    return shown + (", ..." if len(values) > head else "")
 
 
 def _constrained(
