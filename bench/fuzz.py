@@ -105,7 +105,7 @@ def main() -> None:
     write_fe(tmp)
     tally = Tally(a.hang)
     common: dict[str, Any] = dict(
-        deadline=None, database=None, suppress_health_check=list(HealthCheck)
+        deadline=None, database=None, derandomize=True, suppress_health_check=list(HealthCheck)
     )
 
     def invoke(args: list[str], env: dict[str, str] | None = None) -> Any:
