@@ -27,7 +27,8 @@ from rheolin.data import example_text
 ADDS = ("bearing", "force", "layer", "mesh", "transmission_error")
 REFUSED = (
     "bearing_name", "disk_node", "layer_elements", "inertia", "single_double",
-    "negative_stiffness", "body_name", "negative_mass",
+    "negative_stiffness", "body_name", "negative_mass", "components", "speeds", "positions",
+    "link",
 )  # fmt: skip
 
 LAYER = {"elements": [0], "outer_diameter": "44 mm", "inner_diameter": "30 mm",
@@ -118,6 +119,23 @@ def _refused(kind: str, doc: dict[str, Any], draw: st.DrawFn) -> tuple[dict[str,
         doc["rigid_bodies"] = [{"name": "rotor", "position": [0, 0, 1], "mass": 1.0,
                                 "inertia": [1, 1, 1]}]  # fmt: skip
         return doc, None, "rigid_bodies[0].name"
+    if kind == "components":
+        shaft["bearings"][1]["components"] = ["ux", "ux"]
+        return doc, None, "shafts[0].bearings[1]"
+    if kind == "speeds":
+        b = shaft["bearings"][1]
+        b["speeds"] = "1000 1000 3000 rpm"
+        b["stiffness"] = [b["stiffness"]] * 3
+        return doc, None, "shafts[0].bearings[1]"
+    if kind == "positions":
+        shaft["positions"] = "0 300 300 600 mm"
+        return doc, None, "shafts[0]"
+    if kind == "link":
+        doc["rigid_bodies"] = [{"name": "hub", "position": ["0 mm", "0 mm", "600 mm"],
+                                "mass": 1.0, "inertia": [0.01, 0.01, 0.02]}]  # fmt: skip
+        link = {"name": "weld", "body": "rotor", "node": 2, "other_body": "hub", "other_node": 0}
+        doc["rigid_links"] = [link, dict(link, name="weld_again")]
+        return doc, None, "rigid_links"
     shaft["disks"][0] = {"node": 1, "mass": "-7 kg", "inertia": [0.1, 0.1, 0.2]}
     return doc, None, "shafts[0].disks[0].mass"
 
