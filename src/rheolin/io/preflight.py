@@ -88,7 +88,7 @@ def preflight(
     if needs_load if free_bodies is None else free_bodies:  # a Campbell diagram needs not
         check_free_bodies(system)
     n = int(system.n)
-    per_harmonic = VECTORS_PER_HARMONIC * 16 * n
+    per_harmonic = _per_harmonic(system)
     limit = solve_budget() if budget is None else int(budget)
     max_size = max(limit // per_harmonic, 1)
     if not system.load_harmonics:
@@ -116,13 +116,29 @@ def preflight(
             + ("" if max_order is None else f" with max_order {max_order:g}")
             + f" grows the harmonic set past {max_size:,} harmonics, the most that fit the "
             f"memory budget of {format_bytes(limit)} with {n} DOF (a solve holds at least "
-            f"{VECTORS_PER_HARMONIC} complex vectors per harmonic: "
-            f"{format_bytes(per_harmonic)} each); lower `order` or set `max_order` "
+            f"{format_bytes(per_harmonic)} per harmonic: {VECTORS_PER_HARMONIC} complex "
+            "vectors and its share of the GMRES basis); lower `order` or set `max_order` "
             "(or raise RHEOLIN_SOLVE_MEMORY)"
         ) from None
     except ValueError as exc:
         raise ModelError(f"harmonics: {exc}") from None
     return Preflight(n, len(hset), len(hset) * per_harmonic)
+
+
+def _per_harmonic(system: Any) -> int:
+    """Bytes a solve holds per harmonic of the two-sided set, before any factor: at least
+    :data:`VECTORS_PER_HARMONIC` complex vectors, or the operator's own estimate of its
+    vectors and GMRES basis (:class:`~rheolin.linalg.memory.SolveMemory`, per harmonic
+    ``n >= 0``, two of which make about one of each sign)."""
+    from ..linalg.memory import SolveMemory
+
+    touched = np.zeros(system.n, bool)  # the support of the time variation
+    for name in ("M", "D", "K"):
+        for k, X in getattr(system, name).items():
+            if k:
+                touched[np.flatnonzero(np.abs(X).sum(axis=1))] = True
+    operator = SolveMemory(system.n, 2, int(touched.sum())).total // 2
+    return max(VECTORS_PER_HARMONIC * 16 * system.n, operator)
 
 
 def check_free_bodies(system: Any) -> None:
