@@ -46,6 +46,7 @@ __all__ = [
     "FreeBodyError",
     "RigidModes",
     "find_rigid_modes",
+    "free_body_message",
     "held_rigid_modes",
     "unheld_motions",
 ]
