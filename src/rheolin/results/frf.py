@@ -42,6 +42,7 @@ __all__ = [
     "FrequencyResponse",
     "frequency_response",
     "parse_dof",
+    "receptance_unit",
     "system_frequency_response",
 ]
 
@@ -53,6 +54,22 @@ DEFAULT_ORDER = 2
 BOUNDARY_WARN = 1e-3
 
 COMPONENTS = ("ux", "uy", "uz", "phix", "phiy", "phiz")
+
+
+def receptance_unit(output: str, inp: str, unbalance: bool = False) -> str:
+    """The unit of a receptance from DOF ``inp`` to DOF ``output`` (labels
+    ``body:node:component``; a bare index counts as a translation): ``m/N``, ``rad/N``,
+    ``m/(N m)``, ``rad/(N m)``, or per kg m of unbalance.
+
+    >>> receptance_unit("r:1:ux", "r:1:ux"), receptance_unit("r:1:phiz", "r:0:phiz")
+    ('m/N', 'rad/(N m)')
+    >>> receptance_unit("r:1:uy", "r:1:ux", unbalance=True)
+    'm/(kg m)'
+    """
+    top = "rad" if str(output).rsplit(":", 1)[-1].startswith("phi") else "m"
+    if unbalance:
+        return f"{top}/(kg m)"
+    return f"{top}/(N m)" if str(inp).rsplit(":", 1)[-1].startswith("phi") else f"{top}/N"
 
 
 @dataclass
@@ -96,6 +113,37 @@ class FrequencyResponse:
         """``q_0`` per unit input, at the excitation frequency: ``(n_f, n_out, n_in)``."""
         return self.response[:, int(np.flatnonzero(self.sidebands == 0)[0])]
 
+    @classmethod
+    def from_dataset(cls, ds: Any) -> FrequencyResponse:
+        """The response read back from :meth:`to_dataset` (``frf.nc``).
+
+        >>> import numpy as np, rheolin as rl
+        >>> s = rl.PeriodicSystem(1.0, M={0: np.eye(1)}, K={0: 4 * np.eye(1)})
+        >>> r = system_frequency_response(s, [1.0, 3.0], inputs=[0])
+        >>> back = FrequencyResponse.from_dataset(r.to_dataset())
+        >>> bool(np.allclose(back.receptance, r.receptance)), back.inputs
+        (True, ['0'])
+        """
+
+        def joined(da: Any) -> np.ndarray:
+            return np.asarray(da.sel(part="real").values + 1j * da.sel(part="imag").values)
+
+        attrs = ds.attrs
+        return cls(
+            frequencies=np.asarray(ds["frequency"].values, dtype=float) * 2 * np.pi,
+            sidebands=np.asarray(ds["sideband"].values, dtype=np.int64),
+            response=joined(ds["sideband_response"]),
+            inputs=[str(v) for v in ds["input"].values],
+            outputs=[str(v) for v in ds["output"].values],
+            omega=float(attrs.get("base_frequency_rad_s", float("nan"))),
+            speed=float(attrs.get("speed_rad_s", float("nan"))),
+            unbalance=bool(attrs.get("unbalance", 0)),
+            info={
+                "lattice_order": int(attrs.get("lattice_order", 0)),
+                "boundary_fraction": float(attrs.get("boundary_fraction", 0.0)),
+            },
+        )
+
     def to_dataset(self) -> Any:
         """The FRF as an ``xarray.Dataset`` (complex values on a trailing ``part`` axis).
 
@@ -111,23 +159,32 @@ class FrequencyResponse:
             return np.stack([z.real, z.imag], axis=-1)
 
         hz = self.frequencies / (2 * np.pi)
-        unit = "per kg m of unbalance" if self.unbalance else "per N (or N m) of input"
+        units = np.array(
+            [[receptance_unit(o, i, self.unbalance) for i in self.inputs] for o in self.outputs],
+            dtype=str,
+        )
+        unit = (
+            str(units.flat[0])
+            if len(set(units.flat)) == 1
+            else "per output and input: receptance_units"
+        )
         return xr.Dataset(
             {
                 "receptance": (
                     ("frequency", "output", "input", "part"),
                     parts(self.receptance),
-                    {"description": f"response at the excitation frequency, {unit}"},
+                    {"units": unit, "long_name": "response at the excitation frequency"},
                 ),
                 "sideband_response": (
                     ("frequency", "sideband", "output", "input", "part"),
                     parts(self.response),
-                    {"description": "response at w + h w1 (h = sideband), " + unit},
+                    {"units": unit, "long_name": "response at w + h w1 (h = sideband)"},
                 ),
+                "receptance_units": (("output", "input"), units, {"units": "1"}),
             },
             coords={
                 "frequency": ("frequency", hz, {"units": "Hz"}),
-                "sideband": ("sideband", self.sidebands.astype(np.int64)),
+                "sideband": ("sideband", self.sidebands.astype(np.int64), {"units": "1"}),
                 "sideband_offset": (
                     "sideband",
                     self.sidebands * self.omega / (2 * np.pi),
