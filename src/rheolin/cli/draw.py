@@ -8,6 +8,7 @@ import typer
 from rich.markup import escape
 
 from .common import MODEL, console, fail, load
+from .progress import working
 
 __all__ = ["draw", "register"]
 
@@ -33,7 +34,8 @@ def draw(model: Path = MODEL, out: Path | None = DRAW_OUT, nodes: bool = NODES) 
         raise fail(f"--out: {str(path)!r} is a directory; give an image file name")
     check_output_dir(path.parent if str(path.parent) else Path("."), "--out")
     name = lm.spec.model.name or model.stem
-    draw_model(lm.model, path, nodes=nodes, title=f"{name} ({model.name})")
+    with working(f"drawing {model.name}"):
+        draw_model(lm.model, path, nodes=nodes, title=f"{name} ({model.name})")
     console.print(f"wrote {escape(str(path))}", highlight=False)
 
 

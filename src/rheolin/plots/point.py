@@ -22,6 +22,7 @@ from ._common import length_unit, mark_frequencies, new_figure, save, shown_harm
 from .layout import drop_overlapping
 
 __all__ = [
+    "bearing_amplitudes",
     "bearing_spectra_figure",
     "convergence_figure",
     "default_nodes",
@@ -31,11 +32,14 @@ __all__ = [
     "plot_orbits",
     "plot_spectrum",
     "point_plots",
+    "radial_amplitude",
     "spectrum_figure",
 ]
 
 
-def _radial(ds: xr.Dataset) -> xr.DataArray:
+def radial_amplitude(ds: xr.Dataset) -> xr.DataArray:
+    """Radial amplitude ``hypot(|ux|, |uy|)`` per node and harmonic, single-sided (``2 |x_n|``
+    for ``n > 0``) [m]."""
     q = complex_values(ds["displacement"])
     r = np.hypot(np.abs(q.sel(component="ux")), np.abs(q.sel(component="uy")))
     return r * xr.where(q["harmonic"] > 0, 2.0, 1.0)
@@ -43,7 +47,7 @@ def _radial(ds: xr.Dataset) -> xr.DataArray:
 
 def default_nodes(ds: xr.Dataset) -> list[str]:
     """Per body, the node with the largest oscillating radial response."""
-    dyn = _radial(ds).where(ds["harmonic"] > 0, 0.0).sum("harmonic")
+    dyn = radial_amplitude(ds).where(ds["harmonic"] > 0, 0.0).sum("harmonic")
     out = []
     for body in dict.fromkeys(ds["body"].values.tolist()):
         out.append(str(dyn.where(ds["body"] == body, drop=True).idxmax("node").values))
@@ -123,7 +127,7 @@ def spectrum_figure(ds: xr.Dataset, nodes: Sequence[str] | None = None) -> Figur
     nodes = list(nodes or default_nodes(ds))
     fig, axes = new_figure(1, 1, (9, 5.2))
     ax = axes[0, 0]
-    r = _radial(ds)
+    r = radial_amplitude(ds)
     f = ds["frequency"].values
     osc = ds["harmonic"].values > 0
     top = float(max(r.sel(node=nodes).values[osc].max(initial=0.0) * 1e6, 1e-12))
@@ -166,9 +170,9 @@ _QUANTITIES = (
 )
 
 
-def _bearing_amplitudes(ds: xr.Dataset, b: str) -> list[tuple[str, str, np.ndarray]]:
+def bearing_amplitudes(ds: xr.Dataset, b: str) -> list[tuple[str, str, np.ndarray]]:
     """The oscillating amplitudes of bearing ``b`` that are not zero: ``(quantity, unit,
-    amplitude per harmonic)``, radial first."""
+    amplitude per oscillating harmonic)``, radial first."""
     F = complex_values(ds["bearing_force"].sel(bearing=b))
     osc = ds["harmonic"].values > 0
     out = []
@@ -184,7 +188,7 @@ def bearing_spectra_figure(ds: xr.Dataset) -> Figure:
     (radial force, else axial force, torsional or tilting moment, by what the joint carries)
     against frequency; bearings without a dynamic load are named in the title."""
     names = [str(b) for b in ds["bearing"].values]
-    found = [(b, _bearing_amplitudes(ds, b)) for b in names]
+    found = [(b, bearing_amplitudes(ds, b)) for b in names]
     quiet = [b for b, q in found if not q]
     panels = [(b, q[0]) for b, q in found if q]
     cols = 2 if len(panels) > 1 else 1

@@ -22,7 +22,7 @@ has the lattice ``{0}`` and the classical ``H(w) = (K - w^2 M + i w (D + W G))^-
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -155,6 +155,8 @@ class FrequencyResponse:
         """
         import xarray as xr
 
+        from .units import significant
+
         def parts(z: np.ndarray) -> np.ndarray:
             return np.stack([z.real, z.imag], axis=-1)
 
@@ -196,6 +198,7 @@ class FrequencyResponse:
             },
             attrs={
                 "speed_rad_s": float(self.speed),
+                "speed_rpm": significant(float(self.speed) * 30 / np.pi),
                 "base_frequency_rad_s": float(self.omega),
                 "unbalance": int(self.unbalance),
                 "lattice_order": int(self.info.get("lattice_order", 0)),
@@ -274,6 +277,7 @@ def frequency_response(
     order: int | None = None,
     unbalance: bool = False,
     budget: Any = None,
+    progress: Callable[[int], None] | None = None,
 ) -> FrequencyResponse:
     """FRF of ``model`` turning at ``speed`` [rad/s], over excitation ``frequencies`` [rad/s].
 
@@ -281,7 +285,7 @@ def frequency_response(
     outputs default to the inputs). A unit force (or moment) at each input in turn, at each
     frequency; ``unbalance=True`` scales it by ``w^2`` (the force of a unit ``m e`` turning at
     ``w``). ``order``: the lattice order for a time-periodic model (default 2). See the module
-    docstring for the convention.
+    docstring for the convention. ``progress(done)`` is called after each frequency.
 
     >>> import numpy as np, rheolin as rl
     >>> m = rl.Model()
@@ -301,7 +305,14 @@ def frequency_response(
         return x if isinstance(x, str) else f"{x[0]}:{x[1]}:{x[2]}"
 
     res = system_frequency_response(
-        assembled.system, frequencies, inp, out, order=order, unbalance=unbalance, budget=budget
+        assembled.system,
+        frequencies,
+        inp,
+        out,
+        order=order,
+        unbalance=unbalance,
+        budget=budget,
+        progress=progress,
     )
     res.inputs = [name(x) for x in inputs]
     res.outputs = res.inputs if outputs is None else [name(x) for x in outputs]
@@ -318,6 +329,7 @@ def system_frequency_response(
     order: int | None = None,
     unbalance: bool = False,
     budget: Any = None,
+    progress: Callable[[int], None] | None = None,
 ) -> FrequencyResponse:
     """:func:`frequency_response` of a :class:`~rheolin.PeriodicSystem` (DOFs by index)."""
     w = np.atleast_1d(np.asarray(frequencies, dtype=float))
@@ -368,6 +380,8 @@ def system_frequency_response(
     name = resolve_backend("auto", (pattern.indptr, pattern.indices, pattern.shape[0]))
     analysis = analyze(name, pattern.indptr, pattern.indices, True, sample=pattern.data)
     for i, wi in enumerate(w):
+        if progress is not None:
+            progress(i)
         Q = hill.Q(1j * wi)  # the same pattern at every frequency: one symbolic analysis
         x = _solve(analysis, Q, rhs)
         if x is None:  # singular: an undamped resonance, or a free body at 0
@@ -380,6 +394,8 @@ def system_frequency_response(
             worst = max(worst, float(np.max(per[boundary].sum(axis=0) / np.maximum(total, 1e-300))))
         scale = wi * wi if unbalance else 1.0
         resp[i] = scale * np.einsum("oj,hji->hoi", C_out, x.reshape(nh, n, inp.size))
+    if progress is not None:
+        progress(w.size)
     info: dict[str, Any] = {
         "sparse_backend": name,
         "lattice_order": lat.order,
