@@ -1,6 +1,6 @@
-"""Progress on stderr when it is not a terminal (a log): a line when a long step starts, at
-most one every RHEOLIN_PROGRESS_INTERVAL seconds with the count, and one when it ends; the
-results on stdout are untouched."""
+"""Progress on stderr when it is not a terminal (a log): at most one line every
+RHEOLIN_PROGRESS_INTERVAL seconds with the count, and one when a long step ends; the results
+on stdout are untouched."""
 
 from __future__ import annotations
 
@@ -25,11 +25,10 @@ def test_campbell_and_run_report_progress_in_a_log(tmp_path):
               "--out", "c", cwd=tmp_path)  # fmt: skip
     assert res.returncode == 0, res.stderr
     lines = res.stderr.splitlines()
-    assert lines[0] == "Campbell diagram: 7 speeds"
     counts = [int(m.group(1)) for m in map(re.compile(r"(\d) of 7 speeds").search, lines) if m]
     assert counts == sorted(counts) and counts[-1] == 7  # in order, up to the last
-    assert "done in" in lines[len(counts)]
+    assert "done in" in lines[len(counts) - 1]  # the last line is the end of the step
     assert "Campbell diagram" not in res.stdout  # the log stays on stderr
     res = cli("run", "rotor.toml", "--out", "r", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
-    assert "solving at 3000 rpm ..." in res.stderr.splitlines()
+    assert re.search(r"^solving at 3000 rpm: \d+ s \.\.\.$", res.stderr, re.M)

@@ -1,9 +1,10 @@
 """Progress of long steps on stderr, also when it is not a terminal.
 
 On a terminal, rich draws a spinner (or a bar with the count) and the elapsed time. In a log
-(stderr piped or redirected) a line says when a step starts, then one every
-:data:`INTERVAL` seconds while it runs (with the count and the time left when there is a
-count), then when it ends; a step that ends within :data:`INTERVAL` gets no end line.
+(stderr piped or redirected) a step that lasts :data:`INTERVAL` seconds or more writes a
+line every :data:`INTERVAL` seconds while it runs (with the count and the time left when
+there is a count) and one when it ends; a shorter step writes nothing (so that an error
+message stays the first line of stderr).
 
 >>> import io
 >>> from rich.console import Console
@@ -13,7 +14,6 @@ count), then when it ends; a step that ends within :data:`INTERVAL` gets no end 
 ...     for k in range(1, 5):
 ...         step(k)
 >>> print(log.file.getvalue().strip())
-Floquet stability: 4 speeds
 Floquet stability: 2 of 4 speeds, 6 s, about 6 s left
 Floquet stability: 4 of 4 speeds, done in 12 s
 """
@@ -55,8 +55,8 @@ def working(
     what: str, *, console: Console | None = None, interval: float = INTERVAL
 ) -> Iterator[None]:
     """A step without a count: a spinner with the elapsed time on a terminal; in a log a
-    line at the start, one every ``interval`` seconds (from a timer thread, so also while
-    the step computes) and one at the end of a long step."""
+    line every ``interval`` seconds (from a timer thread, so also while the step computes)
+    and one at the end of a long step."""
     out = console or err
     if out.is_terminal:
         columns = (SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn())
@@ -64,13 +64,12 @@ def working(
             bar.add_task(what, total=None)
             yield
         return
-    _line(out, f"{what} ...")
     start = time.monotonic()
     stop = threading.Event()
 
     def beat() -> None:
         while not stop.wait(interval):
-            _line(out, f"{what}: {time.monotonic() - start:.0f} s")
+            _line(out, f"{what}: {time.monotonic() - start:.0f} s ...")
 
     timer = threading.Thread(target=beat, name="rheolin-progress", daemon=True)
     timer.start()
@@ -95,8 +94,8 @@ def counted(
     clock: Callable[[], float] = time.monotonic,
 ) -> Iterator[Callable[[int], None]]:
     """A step over ``total`` items: yields ``update(done)``. A bar with the count and the
-    time left on a terminal; in a log a line at the start, at most one every ``interval``
-    seconds as items finish, and one at the end of a long step."""
+    time left on a terminal; in a log at most one line every ``interval`` seconds as items
+    finish, and one at the end of a long step."""
     out = console or err
     items = f" {unit}" if unit else ""
     if out.is_terminal:
@@ -111,7 +110,6 @@ def counted(
             task = bar.add_task(what, total=total)
             yield lambda done: bar.update(task, completed=done)
         return
-    _line(out, f"{what}: {total}{items}")
     lines = LogLines(out, what, total, items, interval, clock)
     yield lines.update
     lines.close()
