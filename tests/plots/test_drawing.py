@@ -76,3 +76,26 @@ def test_draw_command_writes_png_and_svg(tmp_path):
         capture_output=True, text=True, env=env, timeout=300,
     )  # fmt: skip
     assert res.returncode == 2
+
+
+def test_condensed_body_and_bearings_between_bodies_are_drawn():
+    """A shaft on two bearings to a condensed housing (two interface nodes), one of them
+    with a rigid link: the housing's box, the springs between bodies and the link drawn."""
+    import rheolin as rl
+
+    m = rl.Model()
+    m.add_shaft("s", np.linspace(0, 0.4, 5), outer_diameter=0.04, material="steel")
+    K = np.kron(np.eye(2), np.diag([1e9, 1e9, 1e9, 1e7, 1e7, 1e7]))
+    m.add_condensed_body("housing", [[0.0, -0.1, 0.0], [0.0, -0.1, 0.4]], M=10 * np.eye(12),
+                         K=K, speed_ratio=0)  # fmt: skip
+    for k, node in ((0, 0), (4, 1)):
+        m.add_bearing(f"b{k}", "s", k, stiffness=1e8, other_body="housing", other_node=node)
+    m.add_bearing("feet", "housing", 0, stiffness=1e9, components=None)
+    m.add_rigid_link("tie", "s", 2, "housing", 1, components=["uz"])
+    fig = model_figure(m, nodes=True)
+    assert problems(fig) == []
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    for entry in ("condensed body", "bearing between bodies", "rigid link"):
+        assert entry in labels
+    texts = [t.get_text() for t in fig.axes[0].texts if t.get_visible()]
+    assert "housing (condensed, 0 modes)" in texts
