@@ -111,3 +111,17 @@ def test_operating_range_option():
     lo, hi = parse_operating("47:53Hz")
     assert (lo, hi) == pytest.approx((2820.0, 3180.0))
     assert np.isclose(parse_operating("314.159265rad/s")[0], 3000.0, rtol=1e-8)
+
+
+def test_parameter_study_report_lists_each_band_with_its_parameter(tmp_path):
+    """k_y = 1.21e4 and 1.44e4 N/m: bands from sqrt(k_x/m) = 100 rad/s to sqrt(k_y/m) = 110
+    and 120 rad/s, each listed with its parameter value."""
+    (tmp_path / "band.toml").write_text(BAND)
+    res = run_cli("sweep", "band.toml", "--speeds", "900:1200:50rpm", "--out", "study",
+                  "--vary", "bearings.spring.stiffness[1]=1.21e4,1.44e4 N/m", "--workers", "1",
+                  "--report", cwd=tmp_path)  # fmt: skip
+    assert res.returncode == 1, res.stderr
+    text = (tmp_path / "study" / "report.html").read_text(encoding="utf-8")
+    for ky, upper in ((12100.0, 110.0), (14400.0, 120.0)):
+        row = f"<td>{upper * 30 / math.pi:.6g}</td>"
+        assert row in text and f"bearings.spring.stiffness[1] = {ky}" in text

@@ -187,7 +187,9 @@ def _stability_sections(page: Page, d: ResultDirectory) -> None:
     ranges = _ranges(d)
     body = ""
     if sds is not None and "speed" in sds.dims and "max_real" in sds:
-        body += _map_summary(sds) + page.figure(figures.stability_figure(sds))
+        body += _map_summary(sds)
+        if sds["max_real"].dims == ("speed",):  # a parameter study's maps: its PNGs show them
+            body += page.figure(figures.stability_figure(sds))
     head = [
         "from [rpm]",
         "to [rpm]",
