@@ -1,13 +1,15 @@
 """Make docs/gallery.md: every figure rheolin draws, from the embedded examples, each checked
 for overlapping labels, empty panels and phantom legend entries (rheolin.plots.layout).
 
-    OPENBLAS_NUM_THREADS=1 python docs/gallery/make.py     # a few minutes on 2 cores
+    OPENBLAS_NUM_THREADS=1 python docs/gallery/make.py          # every figure (6 CPU minutes)
+    OPENBLAS_NUM_THREADS=1 python docs/gallery/make.py study    # one figure, gallery.md anew
 
 Exits 1 (and names the figure) when a figure has a problem.
 """
 
 from __future__ import annotations
 
+import functools
 import sys
 import time
 from collections.abc import Callable
@@ -36,7 +38,6 @@ from rheolin.stability.critical_map import critical_speed_map
 
 HERE = Path(__file__).parent
 RPM = np.pi / 30
-entries: list[tuple[str, str, str]] = []
 failures: list[str] = []
 
 
@@ -48,7 +49,6 @@ def figure(name: str, what: str, command: str, build: Callable[[], Any]) -> None
     if found:
         failures.append(f"{name}: {'; '.join(found)}")
     save(fig, HERE / f"{name}.png")
-    entries.append((name, what, command))
     print(f"{name}: {time.perf_counter() - t0:.1f} s {'OK' if not found else found}", flush=True)
 
 
@@ -64,126 +64,156 @@ def stability_figure(smap: Any) -> Any:
     return captured[0]
 
 
-def main() -> int:
-    gearbox, rotor, pair = (load_model(example_path(n)) for n in ("gearbox", "rotor", "preloaded"))
-    for label, model in (("gearbox", gearbox), ("rotor", rotor), ("preloaded", pair)):
-        figure(
-            f"drawing_{label}",
-            f"model drawing of the {label} example, node numbers on",
-            f"rheolin draw {label}.toml --nodes",
-            lambda model=model, label=label: model_figure(model, nodes=True, title=label),
-        )
-    ds = point_dataset(solve_point(gearbox, 3000 * RPM))
-    run = "rheolin run gearbox.toml --speed 3000rpm --out out"
-    figure(
-        "run_orbits",
-        "orbits about the static position (out/orbits.png)",
-        run,
-        lambda: P.orbits_figure(ds),
-    )
-    figure(
-        "run_spectrum",
-        "response spectrum, log-log, 60 dB (out/spectrum.png)",
-        run,
-        lambda: P.spectrum_figure(ds),
-    )
-    figure(
-        "run_bearing_forces",
-        "bearing load spectra (out/bearing_forces.png)",
-        run,
-        lambda: P.bearing_spectra_figure(ds),
-    )
-    figure(
-        "run_convergence",
-        "solver convergence and the backward error (out/convergence.png)",
-        run,
-        lambda: P.convergence_figure(ds),
-    )
-    dp = point_dataset(solve_point(pair, 1000 * RPM))
-    prun = "rheolin run preloaded.toml --out pair"
-    figure(
-        "preloaded_orbits",
-        "a nanometre orbit under a 19 µm static sag",
-        prun,
-        lambda: P.orbits_figure(dp),
-    )
-    figure(
-        "preloaded_bearing_forces",
-        "an axial-only joint shows its axial force",
-        prun,
-        lambda: P.bearing_spectra_figure(dp),
-    )
-    speeds = np.arange(1500, 4501, 250) * RPM
-    sw = sweep_speeds(gearbox, speeds, stability=False)
-    figure(
-        "sweep",
-        "run-up: response per body and waterfall (sweep.png)",
-        "rheolin sweep gearbox.toml --speeds 1500:4500:250rpm --out sweep",
-        lambda: sweep_figure(sw),
-    )
-    smap = stability_map(rotor, np.arange(1000, 9001, 250) * RPM)
-    figure(
-        "stability_map",
-        "Floquet stability map: the rotor's asymmetric-shaft band",
-        "rheolin sweep rotor.toml --speeds 1000:9000:250rpm --out rsweep",
-        lambda: stability_figure(smap),
-    )
-    cres = campbell(gearbox, np.arange(0, 6001, 500) * RPM)
-    figure(
-        "campbell",
-        "Campbell diagram coloured by whirl ratio, critical speeds circled",
-        "rheolin campbell gearbox.toml --speeds 0:6000:500rpm --out campbell",
-        lambda: campbell_figure(cres),
-    )
-    figure(
-        "modes",
-        "12 modes of the gearbox at 3000 rpm (modes.png)",
-        "rheolin modes gearbox.toml --speed 3000rpm --out modes",
-        lambda: mode_shapes_figure(gearbox, 3000 * RPM, n_modes=12),
-    )
-    frf = frequency_response(
-        rotor, 3000 * RPM, np.arange(1.0, 150.0, 0.25) * 2 * np.pi, inputs=["rotor:1:ux"]
-    )
-    figure(
-        "bode",
-        "receptance with its peak, AF and sidebands (bode.png)",
-        "rheolin frf rotor.toml --speed 3000rpm --frequencies 1:150:0.25Hz "
-        "--input rotor:1:ux --out frf",
-        lambda: bode_figure(frf),
-    )
-    cmap = critical_speed_map(rotor, np.logspace(6, 9, 13))
-    figure(
-        "critical_map",
-        "undamped critical-speed map (critical_map.png)",
-        "rheolin critical-map rotor.toml --stiffness 1e6:1e9:13 --out cmap",
-        lambda: critical_map_figure(cmap),
-    )
+@functools.cache
+def model(name: str) -> Any:
+    return load_model(example_path(name))
+
+
+@functools.cache
+def gearbox_point() -> Any:
+    return point_dataset(solve_point(model("gearbox"), 3000 * RPM))
+
+
+@functools.cache
+def pair_point() -> Any:
+    return point_dataset(solve_point(model("preloaded"), 1000 * RPM))
+
+
+def study() -> Any:
     from rheolin.study import StudySpec, run_study
 
     spec = StudySpec.create(
         example_path("rotor"),
         np.arange(3000, 5501, 125) * RPM,
-        {"bearings.free_end.damping": "200:800:4 N*s/m"},
+        {"bearings.drive_end.stiffness[0]": "2e7:8e7:4 N/m"},
     )
-    result = run_study(spec, workers=1)
-    figure(
+    return parameter_figure(run_study(spec, workers=1), "bearings.drive_end.stiffness[0]")
+
+
+RUN = "rheolin run gearbox.toml --speed 3000rpm --out out"
+PAIR = "rheolin run preloaded.toml --out pair"
+FIGURES: list[tuple[str, str, str, Callable[[], Any]]] = [
+    *[
+        (
+            f"drawing_{n}",
+            f"model drawing of the {n} example, node numbers on",
+            f"rheolin draw {n}.toml --nodes",
+            functools.partial(lambda n: model_figure(model(n), nodes=True, title=n), n),
+        )
+        for n in ("gearbox", "rotor", "preloaded")
+    ],
+    (
+        "run_orbits",
+        "orbits about the static position (out/orbits.png)",
+        RUN,
+        lambda: P.orbits_figure(gearbox_point()),
+    ),
+    (
+        "run_spectrum",
+        "response spectrum, log-log, 60 dB (out/spectrum.png)",
+        RUN,
+        lambda: P.spectrum_figure(gearbox_point()),
+    ),
+    (
+        "run_bearing_forces",
+        "bearing load spectra (out/bearing_forces.png)",
+        RUN,
+        lambda: P.bearing_spectra_figure(gearbox_point()),
+    ),
+    (
+        "run_convergence",
+        "solver convergence and the backward error (out/convergence.png)",
+        RUN,
+        lambda: P.convergence_figure(gearbox_point()),
+    ),
+    (
+        "preloaded_orbits",
+        "a nanometre orbit under a 19 µm static sag",
+        PAIR,
+        lambda: P.orbits_figure(pair_point()),
+    ),
+    (
+        "preloaded_bearing_forces",
+        "an axial-only joint shows its axial force",
+        PAIR,
+        lambda: P.bearing_spectra_figure(pair_point()),
+    ),
+    (
+        "sweep",
+        "run-up: response per body and waterfall (sweep.png)",
+        "rheolin sweep gearbox.toml --speeds 1500:4500:250rpm --out sweep",
+        lambda: sweep_figure(
+            sweep_speeds(model("gearbox"), np.arange(1500, 4501, 250) * RPM, stability=False)
+        ),
+    ),
+    (
+        "stability_map",
+        "Floquet stability map: the rotor's asymmetric-shaft band",
+        "rheolin sweep rotor.toml --speeds 1000:9000:250rpm --out rsweep",
+        lambda: stability_figure(stability_map(model("rotor"), np.arange(1000, 9001, 250) * RPM)),
+    ),
+    (
+        "campbell",
+        "Campbell diagram coloured by whirl ratio, critical speeds circled",
+        "rheolin campbell gearbox.toml --speeds 0:6000:500rpm --out campbell",
+        lambda: campbell_figure(campbell(model("gearbox"), np.arange(0, 6001, 500) * RPM)),
+    ),
+    (
+        "modes",
+        "12 modes of the gearbox at 3000 rpm (modes.png)",
+        "rheolin modes gearbox.toml --speed 3000rpm --out modes",
+        lambda: mode_shapes_figure(model("gearbox"), 3000 * RPM, n_modes=12),
+    ),
+    (
+        "bode",
+        "receptance with its peak, AF and sidebands (bode.png)",
+        "rheolin frf rotor.toml --speed 3000rpm --frequencies 1:150:0.25Hz "
+        "--input rotor:1:ux --out frf",
+        lambda: bode_figure(
+            frequency_response(
+                model("rotor"),
+                3000 * RPM,
+                np.arange(1.0, 150.0, 0.25) * 2 * np.pi,
+                inputs=["rotor:1:ux"],
+            )
+        ),
+    ),
+    (
+        "critical_map",
+        "undamped critical-speed map (critical_map.png)",
+        "rheolin critical-map rotor.toml --stiffness 1e6:1e9:13 --out cmap",
+        lambda: critical_map_figure(critical_speed_map(model("rotor"), np.logspace(6, 9, 13))),
+    ),
+    (
         "study",
-        "parameter study: response and unstable ranges against a bearing damping",
+        "parameter study: response and unstable ranges against a bearing stiffness",
         "rheolin sweep rotor.toml --speeds 3000:5500:125rpm "
-        "--vary 'bearings.free_end.damping=200:800:4 N*s/m' --out study",
-        lambda: parameter_figure(result, "bearings.free_end.damping"),
-    )
+        "--vary 'bearings.drive_end.stiffness[0]=2e7:8e7:4 N/m' --out study",
+        study,
+    ),
+]
+
+
+def main(only: list[str]) -> int:
+    """Draw the figures (those named in ``only``, or all), then write docs/gallery.md."""
+    unknown = set(only) - {name for name, *_ in FIGURES}
+    if unknown:
+        print(f"no figure named {sorted(unknown)}", file=sys.stderr)
+        return 2
+    for name, what, command, build in FIGURES:
+        if not only or name in only:
+            figure(name, what, command, build)
     lines = [
         "# Gallery: every figure rheolin draws",
         "",
-        "Made by `OPENBLAS_NUM_THREADS=1 python docs/gallery/make.py` from the embedded examples",
-        "(`rheolin example NAME > NAME.toml`); each figure is checked for overlapping labels,",
-        "empty panels and legend entries without their artist (`rheolin.plots.layout`) and the",
-        "script fails on any. The HTML report of a result directory (`rheolin report DIR`) shows",
-        "the same results as interactive figures.",
+        "Made by `OPENBLAS_NUM_THREADS=1 python docs/gallery/make.py` (or `... make.py NAME` for",
+        "one figure) from the embedded examples (`rheolin example NAME > NAME.toml`); each figure",
+        "is checked for overlapping labels, empty panels and legend entries without their artist",
+        "(`rheolin.plots.layout`) and the script fails on any. The HTML report of a result",
+        "directory (`rheolin report DIR`) shows the same results as interactive figures.",
         "",
     ]
-    for name, what, command in entries:
+    for name, what, command, _ in FIGURES:
         lines += [f"## {what}", "", f"`{command}`", "", f"![{name}](gallery/{name}.png)", ""]
     (HERE.parent / "gallery.md").write_text("\n".join(lines), encoding="utf-8")
     for f in failures:
@@ -192,4 +222,4 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main(sys.argv[1:]))
