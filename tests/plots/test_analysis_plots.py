@@ -24,8 +24,10 @@ from rheolin.results.frf import system_frequency_response
 from rheolin.results.sweep import sweep_speeds
 from rheolin.stability import campbell, stability_map
 
-sys.path.insert(0, str(Path(__file__).parents[1] / "study"))
-from study_cases import BAND, band_model
+sys.path.insert(0, str(Path(__file__).parents[1] / "report"))
+from report_cases import study_cases
+
+BAND, band_model = study_cases().BAND, study_cases().band_model
 
 
 def overhung() -> rl.Model:

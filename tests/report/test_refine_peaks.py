@@ -15,7 +15,7 @@ import pytest
 from scipy.optimize import brentq
 
 sys.path.insert(0, str(Path(__file__).parent))
-from cases import run_cli
+from report_cases import run_cli
 
 M, K, ZETA = 2.0, 1e6, 0.05
 C = 2 * ZETA * math.sqrt(K * M)

@@ -17,11 +17,10 @@ from rheolin.data import example_text
 from rheolin.report import build_report, read_directory, write_report
 from rheolin.results.api684 import required_margin
 
-sys.path.insert(0, str(Path(__file__).parents[1] / "study"))
-from study_cases import BAND
-
 sys.path.insert(0, str(Path(__file__).parent))
-from cases import run_cli
+from report_cases import run_cli, study_cases
+
+BAND = study_cases().BAND
 
 
 @pytest.fixture(scope="module")

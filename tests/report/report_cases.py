@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import subprocess
 import sys
@@ -17,3 +18,14 @@ def run_cli(*args: str, cwd: Path | None = None) -> Any:
         [sys.executable, "-m", "rheolin.cli", *args],
         capture_output=True, text=True, env=ENV, timeout=600, cwd=cwd,
     )  # fmt: skip
+
+
+def study_cases() -> Any:
+    """tests/study/study_cases.py as a module (loaded by path: tests/study, which has a
+    conftest.py, stays off sys.path)."""
+    path = Path(__file__).parents[1] / "study" / "study_cases.py"
+    spec = importlib.util.spec_from_file_location("rheolin_study_cases", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
