@@ -19,8 +19,8 @@ demo: $(STAMP)
 		--out demo_results/sweep
 
 lint: $(STAMP)
-	$(BIN)/ruff check src tests bench docs/figures.py
-	$(BIN)/ruff format --check src tests bench docs/figures.py
+	$(BIN)/ruff check src tests bench docs/figures.py docs/gallery/make.py
+	$(BIN)/ruff format --check src tests bench docs/figures.py docs/gallery/make.py
 
 typecheck: $(STAMP)
 	$(BIN)/mypy src
