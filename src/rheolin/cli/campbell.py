@@ -80,7 +80,7 @@ def campbell(
             from ..report import write_report
 
             write_report(stage, model=model, where=str(out_dir))
-    set_kept(None)
+    set_kept(f"the files in {out_dir} are complete")
     written = [out_dir / "campbell.nc", out_dir / "campbell.png"]
     if report:
         written.append(out_dir / "report.html")

@@ -192,6 +192,7 @@ class ContractGroup(TyperGroup):
 
     def invoke(self, ctx: Any) -> Any:
         try:
+            set_kept(None)  # an earlier command's files (in-process callers) are not this one's
             check_settings()  # the budget variables, before any work
             return super().invoke(ctx)
         except typer.Exit:

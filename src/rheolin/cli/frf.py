@@ -118,7 +118,7 @@ def frf(
             ds.attrs["max_floquet_real"] = float(verdict.max_real)
         write_dataset(ds, stage / "frf.nc")
         plot_bode(res, stage / "bode.png")
-    set_kept(None)
+    set_kept(f"the files in {out_dir} are complete")
     unit = "m/(kg m)" if unbalance else "m/N"
     rpm = w_speed * 30 / np.pi
     table = Table(title=f"resonance peaks of {escape(model.name)} at {rpm:.0f} rpm")

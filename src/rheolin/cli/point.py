@@ -108,7 +108,7 @@ def run(
 
             written.append(write_report(stage, model=model, where=str(out_dir)))
     written = [out_dir / p.name for p in written]
-    set_kept(None)
+    set_kept(f"the files in {out_dir} are complete")
     if as_json:
         sys.stdout.write(json.dumps(summary, indent=2) + "\n")
     else:
