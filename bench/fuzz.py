@@ -3,9 +3,10 @@
     OPENBLAS_NUM_THREADS=1 python bench/fuzz.py --models 10000 --arguments 2000 \
         --surface 3000 --api 3000 --semantic 1000 --out bench/results/fuzz.md
 
-Categories: mutated model files (``validate``), hostile ``run`` command lines, the other
-commands (``frf``, ``modes``, ``campbell``, ``critical-map``, ``sweep --vary``, ``condense``
-specs, ``import-ross`` files, ``RHEOLIN_*`` variables), the Python entry points (``rl.solve``,
+Categories: mutated model files (``validate``, and ``draw`` of those valid), hostile ``run``
+command lines, the other commands (``frf``, ``modes``, ``campbell``, ``critical-map``,
+``sweep --vary``, ``condense`` specs, ``import-ross`` files, ``draw``, ``report`` of result
+directories real and hostile, ``RHEOLIN_*`` variables), the Python entry points (``rl.solve``,
 ``rl.floquet``, ``Model.add_*``) and semantic mutations (duplicates that add or are refused,
 impossible physics). Counts each outcome and every contract violation: exit 3, a traceback,
 an error line without a field, an API exception of another type or naming nothing, a
@@ -34,7 +35,15 @@ from typer.testing import CliRunner
 sys.path.insert(0, str(Path(__file__).parents[1] / "tests" / "reliability"))
 from fuzz_cases import check_outcome, mutated_model, run_arguments
 from fuzz_semantic import check_semantic, semantic_case
-from fuzz_surface import api_case, check_call, cli_case, condense_spec, ross_text, write_fe
+from fuzz_surface import (
+    api_case,
+    check_call,
+    cli_case,
+    condense_spec,
+    ross_text,
+    write_fe,
+    write_results,
+)
 
 from rheolin.cli import app
 from rheolin.data import example_text
@@ -106,6 +115,7 @@ def main() -> None:
     model = tmp / "rotor.toml"
     model.write_text(example_text("rotor"))
     write_fe(tmp)
+    write_results(tmp / "res")
     tally = Tally(a.hang)
     common: dict[str, Any] = dict(
         deadline=None, database=None, derandomize=True, suppress_health_check=list(HealthCheck)
@@ -114,19 +124,27 @@ def main() -> None:
     def invoke(args: list[str], env: dict[str, str] | None = None) -> Any:
         return runner.invoke(app, args, catch_exceptions=False, env=env)
 
-    def cli(kind: str, args: list[str], env: dict[str, str] | None, case: str) -> None:
+    def cli(kind: str, args: list[str], env: dict[str, str] | None, case: str) -> str:
         t0 = time.process_time()
         res = invoke(args, env)
         seconds = time.process_time() - t0
         tally.record(kind, lambda: check_outcome(res.exit_code, res.stdout, res.stderr), case,
                      seconds)  # fmt: skip
+        return {0: "ok", 1: "failed", 2: "refused"}.get(res.exit_code, "")
+
+    # a result directory of each kind the report reads fully (the others are hostile)
+    for argv in (["run", str(model), "--out", str(tmp / "res" / "run")],
+                 ["campbell", str(model), "--speeds", "0:6000:1000rpm", "--out",
+                  str(tmp / "res" / "run")]):  # fmt: skip
+        assert invoke(argv).exit_code == 0, argv
 
     @settings(max_examples=max(a.models, 1), **common)
     @given(text=mutated_model())
     def models(text: str) -> None:
         path = tmp / "m.toml"
         path.write_text(text)
-        cli("models (validate)", ["validate", str(path)], None, text)
+        if cli("models (validate)", ["validate", str(path)], None, text) == "ok":
+            cli("models (draw)", ["draw", str(path), "--out", str(tmp / "m.png")], None, text)
 
     @settings(max_examples=max(a.arguments, 1), **common)
     @given(args=run_arguments())
@@ -139,7 +157,8 @@ def main() -> None:
         kind, args, env = case
         (tmp / "spec.toml").write_text(spec)
         (tmp / "r.toml").write_text(ross)
-        files = dict(model=str(model), spec=str(tmp / "spec.toml"), ross=str(tmp / "r.toml"))
+        files = dict(model=str(model), spec=str(tmp / "spec.toml"), ross=str(tmp / "r.toml"),
+                     res=str(tmp / "res"))  # fmt: skip
         argv = [x.format(tmp=tmp, **files) for x in args]
         shown = " ".join(args) + (f" env {env}" if env else "")
         shown += {"condense": f" | spec: {spec}", "ross": f" | rotor: {ross}"}.get(kind, "")

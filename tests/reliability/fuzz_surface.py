@@ -21,7 +21,8 @@ from fuzz_cases import HOSTILE_TEXT, HOSTILE_VALUES, NUMBERS, OUT, SPEEDS
 from hypothesis import strategies as st
 
 #: Tags of the CLI categories (bench/fuzz.py counts them apart).
-CATEGORIES = ("frf", "modes", "campbell", "critical", "sweep", "condense", "ross", "env")
+CATEGORIES = ("frf", "modes", "campbell", "critical", "sweep", "condense", "ross", "env", "draw",
+              "report")  # fmt: skip
 
 DOFS = st.sampled_from(
     ["rotor:1:ux", "rotor:1:uy", "rotor:0:phiz", "rotor:9:ux", "rotor:1:uq", "nowhere:0:ux",
@@ -56,6 +57,15 @@ ENV_VALUES = st.sampled_from(
      "[red]1 GB"]
 )  # fmt: skip
 
+DRAWINGS = ["{tmp}/d.png", "{tmp}/d.svg", "{tmp}/d.pdf", "{tmp}/d.txt", "{tmp}", "{tmp}/d",
+            "{tmp}/file/d.png", "{tmp}/no/d.png", "", "[b]d.png"]  # fmt: skip
+#: Result directories for ``report`` (:func:`write_results`; ``run`` only when a caller
+#: computed one there) and other paths.
+RESULTS = ["{res}/empty", "{res}/garbage", "{res}/typed", "{res}/nested", "{res}/foreign",
+           "{res}/run", "{tmp}/file", "{tmp}/no", "{model}", ""]  # fmt: skip
+OPERATING = ["2800:3200rpm", "3000rpm", "3200:2800rpm", "0:1e12rpm", "nan:1rpm", "-5:5rpm",
+             "1:2:3rpm", "3000", "banana"]  # fmt: skip
+REPORTS = ["{tmp}/r.html", "{tmp}", "{tmp}/file/r.html", "{tmp}/no/r.html", "{tmp}/r.txt"]
 
 #: Mostly valid values, so that the cases reach the computation (and its refusals) as often
 #: as the option parsing.
@@ -101,7 +111,9 @@ def cli_case(draw: st.DrawFn) -> tuple[str, list[str], dict[str, str]]:
     elif kind == "sweep":
         args = ["sweep", "{model}", "--speeds", draw(st.sampled_from(["1000,2000rpm", "0rpm"]))]
         args += ["--workers", "1", "--stability", "off", "--no-stability-map"]
-        args += draw(st.sampled_from([["--no-plots"], ["--no-plots"], []]))
+        args += draw(st.sampled_from([["--no-plots"], ["--no-plots"], [], ["--report"]]))
+        if draw(st.booleans()):
+            args += ["--refine-peaks"]
         for _ in range(draw(st.integers(1, 2))):
             args += ["--vary", draw(st.one_of(GOOD_VARY, VARY))]
     elif kind == "condense":
@@ -110,6 +122,17 @@ def cli_case(draw: st.DrawFn) -> tuple[str, list[str], dict[str, str]]:
     elif kind == "ross":
         args = ["import-ross", "{ross}"]
         out = draw(st.sampled_from([[], [], ["--out", "{tmp}/m.toml"], ["--out", "{tmp}"]]))
+    elif kind == "draw":
+        args = ["draw", "{model}", *draw(st.sampled_from([[], ["--nodes"]]))]
+        out = draw(st.sampled_from([[], *[["--out", o] for o in DRAWINGS]]))
+    elif kind == "report":
+        args = ["report", draw(st.sampled_from(RESULTS))]
+        if draw(st.booleans()):
+            args += ["--operating", draw(st.one_of(st.sampled_from(OPERATING), SPEEDS))]
+        if draw(st.booleans()):
+            args += ["--model", draw(st.sampled_from(["{model}", "{ross}", "{tmp}", "{tmp}/no"]))]
+        args += draw(st.sampled_from([[], ["--nodes"]]))
+        out = draw(st.sampled_from([[], *[["--out", o] for o in REPORTS]]))
     else:  # environment variables, under validate or a fast run
         name = draw(st.sampled_from(["RHEOLIN_MEMORY_BUDGET", "RHEOLIN_SOLVE_MEMORY"]))
         env[name] = draw(ENV_VALUES)
@@ -183,6 +206,32 @@ def write_fe(directory: Any) -> None:
     sio.mmwrite(directory / "M.mtx", fe.M)
     sio.mmwrite(directory / "Mneg.mtx", -fe.M)
     np.savetxt(directory / "nodes.csv", fe.coordinates, delimiter=",")
+
+
+def write_results(directory: Any) -> None:
+    """Result directories ``report`` must read or refuse (:data:`RESULTS`): empty, files
+    that are not what they are named, tables with the wrong types, nesting beyond any
+    reader, and a netCDF file of another command under a run's name."""
+    import json
+    from pathlib import Path
+
+    import xarray as xr
+
+    d = Path(directory)
+    for name in ("empty", "garbage", "typed", "nested", "foreign"):
+        (d / name).mkdir(parents=True, exist_ok=True)
+    (d / "garbage" / "summary.json").write_text("{garbage")
+    (d / "garbage" / "results.nc").write_bytes(b"CDF\x01 not netCDF")
+    (d / "garbage" / "campbell.nc").write_text("")
+    typed = {"converged": "yes", "warnings": 3, "speed_rpm": "x", "stability": [1],
+             "operating_point": {"max_displacement_m": "x"}, "harmonics": None}  # fmt: skip
+    (d / "typed" / "summary.json").write_text(json.dumps(typed))
+    (d / "typed" / "sweep.json").write_text(json.dumps({"points": "x", "ranges": 5}))
+    (d / "nested" / "sweep.json").write_text("[" * 100000 + "]" * 100000)
+    ds = xr.Dataset({"x": ("n", np.arange(3.0))}, attrs={"speed_rpm": "x"})
+    for name in ("results.nc", "modes.nc", "frf.nc", "campbell.nc", "sweep.nc"):
+        ds.to_netcdf(d / "foreign" / name)
+    (d / "foreign" / "sweep.json").write_text("null")
 
 
 def ross_document() -> dict[str, Any]:
@@ -338,4 +387,5 @@ __all__ = [
     "condense_spec",
     "ross_text",
     "write_fe",
+    "write_results",
 ]

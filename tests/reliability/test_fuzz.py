@@ -58,10 +58,11 @@ from fuzz_surface import api_case, check_call, cli_case, condense_spec, ross_tex
 @pytest.fixture(scope="module")
 def fe_files(tmp_path_factory):
     pytest.importorskip("skfem")
-    from fuzz_surface import write_fe
+    from fuzz_surface import write_fe, write_results
 
     d = tmp_path_factory.mktemp("fe")
     write_fe(d)
+    write_results(d / "res")
     return d
 
 
@@ -77,13 +78,15 @@ def run_cli_case(invoke, case, files: dict[str, str], tmp_path):
 def test_every_subcommand_and_the_environment_keep_the_contract(
     invoke, rotor, tmp_path, fe_files, case, spec, ross
 ):
-    """frf, modes, campbell, critical-map, sweep --vary, condense specs, import-ross files
-    and RHEOLIN_* variables: exit 2 naming the field, or an honest result."""
+    """frf, modes, campbell, critical-map, sweep --vary, condense specs, import-ross files,
+    draw, report of hostile result directories and RHEOLIN_* variables: exit 2 naming the
+    field, or an honest result."""
     (tmp_path / "file").write_text("not a directory")
     spec_path = fe_files / f"spec_{abs(hash(spec)) % 10**8}.toml"
     spec_path.write_text(spec)
     (tmp_path / "r.toml").write_text(ross)
-    files = {"model": str(rotor), "spec": str(spec_path), "ross": str(tmp_path / "r.toml")}
+    files = {"model": str(rotor), "spec": str(spec_path), "ross": str(tmp_path / "r.toml"),
+             "res": str(fe_files / "res")}  # fmt: skip
     res = run_cli_case(invoke, case, files, tmp_path)
     check_outcome(res.exit_code, res.stdout, res.stderr)
 

@@ -261,3 +261,34 @@ def test_a_sweep_whose_every_point_fails_ends_honestly_with_its_files(invoke, ro
     table = json.loads((tmp_path / "s" / "sweep.json").read_text())
     assert not any(np.ravel(table["success"]))
     assert "no steady state" in json.dumps(table)
+
+
+def test_report_of_result_files_rheolin_did_not_write_says_so_in_its_notes(invoke, tmp_path):
+    """Tables of the wrong shape or types, nesting beyond the reader and netCDF files of
+    another program under result names: the report is written and its first section names
+    each file it could not use (exit 0, never 3); ``--out`` naming a directory is refused."""
+    import html
+    import json
+    import re
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from fuzz_surface import write_results
+
+    write_results(tmp_path)
+    expected = {
+        "typed": ["left out: the result files (summary.json, sweep.json)"],
+        "nested": ["sweep.json could not be read"],
+        "foreign": ["sweep.json could not be read: a JSON NoneType", "left out"],
+        "garbage": ["summary.json could not be read", "results.nc could not be read"],
+    }
+    for name, needles in expected.items():
+        res = invoke("report", tmp_path / name)
+        assert res.exit_code == 0 and "internal error" not in res.stderr, (name, res.stderr)
+        page = (tmp_path / name / "report.html").read_text()
+        notes = html.unescape(re.search(r'<section id="notes">(.*?)</section>', page, re.S)[1])
+        for needle in needles:
+            assert needle in notes, (name, needle, notes)
+    assert json.loads((tmp_path / "typed" / "summary.json").read_text())["warnings"] == 3
+    _refused(invoke("report", tmp_path / "typed", "--out", tmp_path), "--out", "directory")
