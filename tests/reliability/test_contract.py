@@ -143,6 +143,32 @@ def test_ctrl_c_exits_130_and_says_what_was_kept(invoke, rotor, tmp_path, monkey
     assert (tmp_path / "o" / "summary.json").read_text() == '{"earlier": true}'
 
 
+def test_ctrl_c_inside_a_finalizer_still_interrupts_the_command(
+    invoke, rotor, tmp_path, monkeypatch
+):
+    """Python drops a KeyboardInterrupt raised in a weakref callback or ``__del__`` (it
+    prints "Exception ignored" with a traceback); the command gets it back and ends with
+    exit 130, saying what was kept, instead of running on."""
+    import time
+
+    class Finalized:
+        def __del__(self):
+            raise KeyboardInterrupt
+
+    def solve(*a, **k):
+        Finalized()  # dropped at once: its KeyboardInterrupt is unraisable
+        t_end = time.monotonic() + 60
+        while time.monotonic() < t_end:  # a computation that would go on
+            time.sleep(0.01)
+        raise AssertionError("the interrupt was lost")
+
+    monkeypatch.setattr(results_pkg, "solve_point", solve)
+    res = invoke("run", rotor, "--out", tmp_path / "o")
+    assert res.exit_code == 130, res.stderr
+    assert "interrupted: nothing written" in res.stderr and "Traceback" not in res.stderr
+    assert not (tmp_path / "o").exists()
+
+
 def test_missing_material_constants_are_errors_unless_a_material_is_named(tmp_path):
     text = example_text("rotor").replace('elastic_modulus = "210 GPa"\n', "")
     with pytest.raises(ValueError, match=r"shafts\[0\]\.elastic_modulus: required"):

@@ -88,6 +88,8 @@ def test_ross_file_with_a_unit_string_is_refused_naming_the_element(invoke, tmp_
     _refused(invoke("import-ross", tmp_path / "r.toml"), "ShaftElement_0.material.E", "211 GPa")
     (tmp_path / "r.toml").write_text(ROSS_TEXT.replace("Id = 0.1", "Id = [0.1]"))
     _refused(invoke("import-ross", tmp_path / "r.toml"), "DiskElement_Disk 0.Id")
+    (tmp_path / "r.toml").write_text('ShaftElement_9 = "x"\n' + ROSS_TEXT)  # not a table
+    _refused(invoke("import-ross", tmp_path / "r.toml"), "ShaftElement_9: expected a table")
     (tmp_path / "r.toml").write_text(ROSS_TEXT)
     _refused(invoke("import-ross", tmp_path / "r.toml", "--out", tmp_path), "--out")
 

@@ -16,11 +16,13 @@ for ``python -m rheolin.cli``, the ``rheolin`` script and ``typer.testing.CliRun
 
 from __future__ import annotations
 
+import _thread
 import contextlib
 import os
 import re
 import signal
 import sys
+import threading
 import traceback
 from collections.abc import Iterator
 from typing import Any, NoReturn
@@ -65,7 +67,7 @@ EXIT_INTERRUPTED = 130
 #: no highlighting; user text is printed with ``markup=False`` (see :func:`plain_error`).
 err = Console(stderr=True, emoji=False, highlight=False)
 
-_STATE: dict[str, Any] = {"debug": False, "kept": None}
+_STATE: dict[str, Any] = {"debug": False, "kept": None, "running": False}
 
 
 class UserError(Exception):
@@ -187,10 +189,39 @@ def exit_with(code: int) -> NoReturn:
     raise typer.Exit(code)
 
 
+def _redelivering(previous: Any) -> Any:
+    """An unraisable-exception hook that gives a Ctrl-C back to the command: one landing in a
+    finalizer or weakref callback is printed and dropped by Python (the command would go on
+    and print a traceback); it is raised again in the main thread once the callback returns."""
+
+    def again() -> None:
+        if _STATE.get("running"):
+            _thread.interrupt_main()
+
+    def hook(unraisable: Any) -> None:
+        if unraisable.exc_type is not None and issubclass(unraisable.exc_type, KeyboardInterrupt):
+            threading.Timer(0.1, again).start()  # after the callback has returned
+            return
+        previous(unraisable)
+
+    return hook
+
+
 class ContractGroup(TyperGroup):
     """The ``rheolin`` command group with the error contract of this module."""
 
     def invoke(self, ctx: Any) -> Any:
+        previous = sys.unraisablehook
+        hook = sys.unraisablehook = _redelivering(previous)
+        _STATE["running"] = True
+        try:
+            return self._invoke(ctx)
+        finally:
+            _STATE["running"] = False
+            if sys.unraisablehook is hook:  # not replaced on the way out (_interrupted)
+                sys.unraisablehook = previous
+
+    def _invoke(self, ctx: Any) -> Any:
         try:
             set_kept(None)  # an earlier command's files (in-process callers) are not this one's
             check_settings()  # the budget variables, before any work

@@ -141,14 +141,14 @@ def read_ross_document(doc: dict[str, Any]) -> Model:
             f"ROSS file: element classes {other} are not supported; supported: {list(known)} "
             "(save magnetic, ball or roller bearings as BearingElement coefficient tables)"
         )
+    for key, v in items.items():
+        if not isinstance(v, dict):
+            raise ModelError(f"{key}: expected a table of the element's arguments")
     shafts = [(k, v) for k, v in items.items() if _kind(k) == "ShaftElement"]
     if not shafts:
         raise ModelError("ROSS file: no ShaftElement; the rotor needs a shaft")
     model = Model()
     positions = _add_shaft(model, shafts)
-    for key, v in items.items():
-        if not isinstance(v, dict):
-            raise ModelError(f"{key}: expected a table of the element's arguments")
     for key, v in items.items():
         if _kind(key) == "DiskElement":
             n = _int(v, "n", key)
