@@ -245,7 +245,10 @@ def main() -> None:
         "",
         "Slowest case of each category (CPU seconds):",
         "",
-        *[f"- {k}: {v[0]:.2f} s: `{v[1][:160]}`" for k, v in sorted(tally.slowest.items())],
+        *[
+            f"- {k}: {v[0]:.2f} s: `{' / '.join(v[1][:160].splitlines())}`"
+            for k, v in sorted(tally.slowest.items())
+        ],
         "",
         f"Violations ({len(tally.violations)}):" if tally.violations else "No violation.",
         "",
