@@ -1,0 +1,233 @@
+"""Floquet verdicts for models above the dense limit of the time-averaged modes (issue 31).
+
+References, each independent of the method under test:
+
+* the example rotor's 3-node model by the dense Hill method (the verdicts and largest real
+  parts the finely meshed rotor must reproduce to its discretization error);
+* the dense lattice method (every time-averaged mode, section 3 of docs/stability.md) on
+  models just below the old limit, against the band method forced on the same system;
+* monodromy matrices (``solve_ivp``, DOP853) for the body-frame transformation and for a
+  hidden high-frequency parametric instability;
+* dense eigenvalues for the energy bound on the time-averaged modes left out.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import rheolin as rl
+from rheolin.data.fine import mesh_chain, refined_example
+from rheolin.io import parse_model
+
+PHASE_B = "issue 31 phase B: the band method is not implemented yet"
+
+RPM = np.pi / 30
+
+
+def _assembled(text: str, rpm: float):
+    model = parse_model(text).model
+    return model.speed_template().assemble(rpm * RPM)
+
+
+def _monodromy_max_real(system: rl.PeriodicSystem, rtol: float = 1e-11) -> float:
+    n, period = system.n, 2 * np.pi / system.omega
+
+    def rhs(t: float, y: np.ndarray) -> np.ndarray:
+        M, D, K = (np.asarray(system.evaluate(name, t)) for name in "MDK")
+        q, v = y[:n], y[n:]
+        return np.concatenate([v, np.linalg.solve(M, -D @ v - K @ q)])
+
+    cols = [
+        solve_ivp(rhs, (0.0, period), e, rtol=rtol, atol=1e-14, method="DOP853").y[:, -1]
+        for e in np.eye(2 * n)
+    ]
+    mu = np.linalg.eigvals(np.column_stack(cols))
+    return float(np.log(np.abs(mu).max()) / period)
+
+
+@pytest.fixture(scope="module")
+def three_node() -> dict[float, rl.FloquetResult]:
+    """The example rotor as shipped (3 shaft nodes), dense Hill method."""
+    out = {}
+    for rpm in (3000.0, 4220.0):
+        s = _assembled(refined_example("rotor", 3), rpm).system
+        out[rpm] = rl.floquet(s, 12, method="dense")
+    return out
+
+
+@pytest.mark.xfail(strict=True, reason=PHASE_B)
+def test_fine_rotor_has_the_verdicts_of_the_three_node_model(three_node) -> None:
+    """401 shaft nodes (2,406 DOF, past the dense limit): decided, the same verdicts and the
+    largest real part within the discretization error (3.5e-4 and 7e-5 relative measured)."""
+    from rheolin.floquet.band import BAND_ABOVE  # noqa: F401
+
+    for rpm, stable in ((3000.0, True), (4220.0, False)):
+        ref = three_node[rpm]
+        assert ref.stable is stable
+        res = rl.floquet(_assembled(refined_example("rotor", 401), rpm).system)
+        assert res.decided and res.stable is stable, (rpm, res.info.get("note"))
+        assert abs(res.max_real - ref.max_real) <= 2e-3 * abs(ref.max_real), (rpm, res.max_real)
+
+
+@pytest.mark.xfail(strict=True, reason=PHASE_B)
+@pytest.mark.parametrize("rpm", [3000.0, 4220.0, 5000.0])
+def test_band_method_matches_the_dense_method_below_the_limit(rpm: float) -> None:
+    """A 61-node rotor (366 DOF): the band method (40 modes) and the dense lattice method on
+    the same system give the same verdict and the same largest real part within the band
+    result's stated uncertainty."""
+    from rheolin.floquet.band import BAND_ABOVE
+
+    s = _assembled(refined_example("rotor", 61), rpm).system
+    dense = rl.floquet(s)
+    band = rl.floquet(s, band=40)
+    assert dense.decided and band.decided
+    assert band.info["band"]["modes"] == 40 and 2 * s.n < BAND_ABOVE
+    assert band.stable is dense.stable
+    unc = band.info["uncertainty"][0] + band.tolerances[0] + dense.tolerances[0]
+    assert abs(band.max_real - dense.max_real) <= max(unc, 1e-9 * abs(dense.max_real))
+
+
+@pytest.mark.xfail(strict=True, reason=PHASE_B)
+def test_body_frame_keeps_the_floquet_exponents() -> None:
+    """The rotor written in its shaft's frame (``q = R(t) p``): the largest real part equals the
+    monodromy matrix's of the inertial system, and the exponents are copies of the inertial
+    ones (moved by multiples of i w1)."""
+    from rheolin.floquet.frames import body_frames
+
+    a = _assembled(refined_example("rotor", 3), 4220.0)
+    rotated = body_frames(a.system, a.system.kept("body_frames"))
+    truth = _monodromy_max_real(a.system)
+    ref = rl.floquet(a.system, 12, method="dense")
+    got = rl.floquet(rotated, 12, method="dense")
+    assert abs(got.max_real - truth) <= 1e-6 * abs(truth)
+    w = a.system.omega
+    for z in got.exponents[got.exponents.real > -50]:
+        d = np.abs(ref.exponents.real - z.real) + np.abs(
+            (ref.exponents.imag - z.imag + w / 2) % w - w / 2
+        )
+        assert d.min() <= 1e-6 * max(abs(z), w)
+
+
+@pytest.mark.xfail(strict=True, reason=PHASE_B)
+def test_energy_bound_on_the_modes_left_out() -> None:
+    """Random damped gyroscopic systems with circulatory terms and softening: every
+    time-averaged eigenvalue with ``|lambda| > max(sqrt(gamma), rho)`` has ``Re <= 0``
+    (dense eigenvalues), with ``gamma`` and ``rho`` from
+    :func:`rheolin.floquet.complement.energy_radius`."""
+    from rheolin.floquet.complement import energy_radius
+
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        n = 12
+        A = rng.standard_normal((n, n))
+        M = A @ A.T + n * np.eye(n)
+        B = rng.standard_normal((n, n))
+        K = B @ B.T - 0.5 * n * np.eye(n)  # softened: indefinite
+        C = rng.standard_normal((n, 3))
+        Ds = C @ C.T  # damping on three directions
+        G = rng.standard_normal((n, n))
+        G = G - G.T
+        N = 0.3 * (C @ rng.standard_normal((3, 3)) @ C.T)
+        N = N - N.T  # circulatory, where the damping is
+        s = rl.PeriodicSystem(1.0, M={0: M}, D={0: Ds + G}, K={0: K + N})
+        radius = energy_radius(s)
+        Z = np.zeros((n, n))
+        Ainv = np.linalg.solve(M, np.hstack([-(K + N), -(Ds + G)]))
+        lam = np.linalg.eigvals(np.vstack([np.hstack([Z, np.eye(n)]), Ainv]))
+        outside = lam[np.abs(lam) > radius * (1 + 1e-9)]
+        assert np.all(outside.real <= 1e-9 * np.abs(outside))
+
+
+@pytest.mark.xfail(strict=True, reason=PHASE_B)
+def test_hidden_high_frequency_instability_is_never_called_stable() -> None:
+    """A damped chain with a light oscillator at 2e4 rad/s pumped at twice its frequency
+    (Mathieu, inside its first band: the monodromy matrix says unstable) and a band of 10
+    modes that leaves it out: the verdict is unstable or undecided, never a decided stable."""
+    from rheolin.floquet.band import BAND_ABOVE  # noqa: F401
+
+    n = 40
+    s0 = mesh_chain(n, asymmetry=0.0)
+    wh = 2e4
+    K = {k: v for k, v in s0.K.items()}
+    K0 = K[0].toarray()
+    K0[-1, -1] += wh**2
+    K0[-1, :-1] = K0[:-1, -1] = 0.0
+    K[0] = K0
+    pump = np.zeros((n, n))
+    pump[-1, -1] = 0.2 * wh**2  # q = 0.1 a: well inside the first band
+    w1 = 2 * wh / 23.0  # 23 w1 = 2 wh: the mesh harmonic pumps it
+    K[23] = K.get(23, 0) + pump
+    D0 = s0.D[0].toarray()
+    D0[-1, :] = D0[:, -1] = 0.0
+    D0[-1, -1] = 2 * 1e-4 * wh
+    s = rl.PeriodicSystem(w1, M=s0.M, D={0: D0}, K=K)
+    assert _monodromy_max_real(s, rtol=1e-10) > 0
+    res = rl.floquet(s, band=10)
+    assert not (res.decided and res.stable)
+
+
+@pytest.mark.xfail(strict=True, reason=PHASE_B)
+def test_solve_default_stability_never_raises_on_a_large_chain() -> None:
+    """``rl.solve`` with its default stability check on a 3,000-DOF chain with a gear mesh:
+    no exception; a decided verdict, or a message saying why not and what to change."""
+    from rheolin.floquet.band import BAND_ABOVE  # noqa: F401
+
+    s = mesh_chain(3000)
+    sol = rl.solve(s, rl.HarmonicSet.closure([1, 23], [1, 23], order=1))
+    assert sol.floquet is not None or "stability not checked" in sol.message
+    if sol.floquet is not None and not sol.floquet.decided:
+        assert "undecided" in sol.message or "uncertain" in sol.message
+
+
+def _run(args: list[str], env_budget: str | None = None) -> subprocess.CompletedProcess:
+    import os
+
+    env = dict(os.environ)
+    if env_budget is not None:
+        env["RHEOLIN_MEMORY_BUDGET"] = env_budget
+    return subprocess.run(
+        [sys.executable, "-m", "rheolin", *args], capture_output=True, text=True, env=env
+    )
+
+
+@pytest.mark.xfail(strict=True, reason=PHASE_B)
+def test_cli_run_decides_the_fine_rotor(tmp_path: Path) -> None:
+    """``rheolin run`` on the 401-node rotor: stable at 3000 rpm (exit 0), unstable at 4220 rpm
+    (exit 1), both decided; summary.json written."""
+    import json
+
+    from rheolin.floquet.band import BAND_ABOVE  # noqa: F401
+
+    model = tmp_path / "fine.toml"
+    model.write_text(refined_example("rotor", 401))
+    for rpm, code, stable in (("3000rpm", 0, True), ("4220rpm", 1, False)):
+        out = tmp_path / rpm
+        done = _run(["run", str(model), "--speed", rpm, "--out", str(out), "--no-plots"])
+        assert done.returncode == code, done.stdout + done.stderr
+        summary = json.loads((out / "summary.json").read_text())
+        stability = summary["stability"]
+        assert stability["stable"] is stable and stability["decided"] is True
+
+
+@pytest.mark.xfail(strict=True, reason=PHASE_B)
+def test_cli_refuses_a_model_too_large_for_the_band_method(tmp_path: Path) -> None:
+    """``--stability on`` with a memory budget the band method cannot meet: exit 2 before
+    anything runs, with the estimate and what to change."""
+    from rheolin.floquet.band import BAND_ABOVE  # noqa: F401
+
+    model = tmp_path / "fine.toml"
+    model.write_text(refined_example("rotor", 401))
+    done = _run(
+        ["run", str(model), "--stability", "on", "--out", str(tmp_path / "o"), "--no-plots"],
+        env_budget="20 MB",
+    )
+    assert done.returncode == 2, done.stdout + done.stderr
+    text = done.stdout + done.stderr
+    assert "estimated" in text and "RHEOLIN_MEMORY_BUDGET" in text
+    assert not (tmp_path / "o" / "results.nc").exists()
