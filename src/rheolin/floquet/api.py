@@ -17,11 +17,11 @@ from ..harmonics.lattice import Lattice, harmonic_lattice, system_lattice
 from ..harmonics.sets import HarmonicSet, as_harmonic_set
 from ..system.periodic import PeriodicSystem
 from ..system.rigid_modes import find_rigid_modes
-from .band import BandAveraged, band_memory, band_modes
+from . import large
+from .band import BandAveraged, band_memory
 from .confirm import confirm_unresolved
 from .continuation import Continuation
 from .dense import floquet_dense
-from .large import band_estimate, band_info, in_body_frames, inertial_shifts, uses_band
 from .result import FloquetResult, floquet_result
 from .search import lattice_exponents, lattice_memory
 from .sparse import floquet_sparse
@@ -129,9 +129,7 @@ def floquet(
     band
         Lattice method: search from this many time-averaged modes nearest 0, computed
         sparsely, with certificates for the modes left out (docs/stability.md, section 8).
-        ``None``: every mode densely up to ``2 n = 4000``, a band (grown until certified)
-        above; rotating bodies with a distributed time variation and no gear mesh are then
-        written in their own frames (``info["band"]``).
+        ``None``: every mode densely up to ``2 n = 4000``, a band above (``info["band"]``).
 
     Examples
     --------
@@ -158,10 +156,10 @@ def floquet(
     if (
         method in ("auto", "lattice")
         and (harmonics is None or isinstance(harmonics, Lattice))
-        and uses_band(system, band)
+        and large.uses_band(system, band)
     ):
         # a large model: non-axisymmetric unmeshed shafts in their own frames (exact)
-        system, rotated = in_body_frames(system)
+        system, rotated = large.in_body_frames(system)
     if system.constraint is not None:  # rigid links: the exponents of the constrained system
         system = system.constraint.reduce(system)
     rigid = find_rigid_modes(system)
@@ -195,17 +193,17 @@ def _floquet(
 ) -> FloquetResult:
     """:func:`floquet` on a system without rigid-body modes (checked by the caller)."""
     budget = memory_budget
-    large = uses_band(system, band) and not system.time_invariant
+    banded = large.uses_band(system, band) and not system.time_invariant
     if isinstance(harmonics, Lattice):
         if method not in ("auto", "lattice"):
             raise ValueError(
                 f"a Lattice truncation needs method='lattice' (or 'auto'), got {method!r}"
             )
-        modes = _band(system, band, budget, harmonics.order) if large else None
+        modes = large.certified_band(system, band, budget, harmonics.order) if banded else None
         return _floquet_lattice(
             system, harmonics, budget=budget, near=near, continuation=continuation, modes=modes
         )
-    if large and method in ("auto", "lattice") and harmonics is None:
+    if banded and method in ("auto", "lattice") and harmonics is None:
         return _lattice_auto(
             system,
             order,
@@ -333,23 +331,9 @@ def floquet_memory(system: PeriodicSystem, order: int | None = None) -> tuple[st
     if size <= AUTO_DENSE_LIMIT:
         return "dense", size * size * 16 * 7
     p = DEFAULT_LATTICE_ORDER if order is None else int(order)
-    if uses_band(system, None):
-        return "band", band_estimate(system, p)
+    if large.uses_band(system, None):
+        return "band", large.band_estimate(system, p)
     return "lattice", lattice_memory(system, system_lattice(system, p, max_size=10**6))
-
-
-def _band(system: PeriodicSystem, band: int | None, budget: Any, order: int) -> BandAveraged:
-    """The certified band of a large model, refused before anything is built when even the
-    first band and the order's lattice search exceed the memory budget."""
-    _check_budget(
-        band_estimate(system, order, band),
-        budget,
-        f"the band method ({2 * system.n} first-order DOFs, lattice order {order})",
-        "condense bodies (Craig-Bampton) or mesh the shafts more coarsely",
-    )
-    with _single_thread_blas():
-        modes = band_modes(system, band, resolve_budget(budget))
-    return modes
 
 
 def _lattice_auto(
@@ -368,7 +352,7 @@ def _lattice_auto(
     the band of time-averaged modes, built once for every order."""
     limit = resolve_budget(budget)
     p = DEFAULT_LATTICE_ORDER if order is None else int(order)
-    modes = _band(system, band, budget, p) if uses_band(system, band) else None
+    modes = large.certified_band(system, band, budget, p) if large.uses_band(system, band) else None
     lat = system_lattice(system, p, max_size=10**6)
     res = _floquet_lattice(
         system, lat, budget=budget, near=near, continuation=continuation, modes=modes
@@ -457,10 +441,7 @@ def _floquet_lattice(
             out.settle(out, np.flatnonzero(np.isnan(out.truncation)))
             out.settle = None  # it holds the lattice's operators
     w = system.omega
-    if isinstance(modes, BandAveraged) and system.kept("rotated_frames"):
-        # body frames: each exponent as the copy of its dominant mode's inertial frequency
-        shift = inertial_shifts(system, modes)
-        out.exponents = out.exponents + 1j * w * shift[np.clip(out.dominant, 0, shift.size - 1)]
+    out.exponents = large.inertial_exponents(system, modes, out.exponents, out.dominant)
     res = floquet_result(out.exponents, out.bounds, out.edge, w, "lattice", info=out.info)
     order = np.argsort(-out.exponents.real, kind="stable")
     res.truncation = out.truncation[order]
@@ -484,7 +465,7 @@ def _floquet_lattice(
         res.info["confirmed"] = out.info["confirmed"]
     res.info["liouville"] = out.liouville
     if isinstance(modes, BandAveraged):
-        res.info["band"] = band_info(modes, [])
+        res.info["band"] = large.band_info(modes, [])
     return res
 
 

@@ -15,10 +15,12 @@ from typing import Any
 
 import numpy as np
 
+from ..budget import MemoryBudgetError, format_bytes
+from ..budget import memory_budget as resolve_budget
 from ..harmonics.lattice import system_lattice
 from ..system.frames import BodyFrame, rotate, transformation
 from ..system.periodic import PeriodicSystem
-from .band import BAND_ABOVE, BAND_MODES, BandAveraged, band_memory
+from .band import BAND_ABOVE, BAND_MODES, BandAveraged, band_memory, band_modes
 from .complement import touched_dofs
 from .search import lattice_memory
 
@@ -26,8 +28,10 @@ __all__ = [
     "DISTRIBUTED",
     "band_estimate",
     "band_info",
+    "certified_band",
     "frames_to_rotate",
     "in_body_frames",
+    "inertial_exponents",
     "inertial_shifts",
 ]
 
@@ -106,3 +110,33 @@ def band_info(modes: Any, rotated: list[str]) -> dict[str, Any]:
     else:
         out.update({"certified": False, "reason": "the modes left out were not bounded"})
     return out
+
+
+def certified_band(system: PeriodicSystem, band: int | None, budget: Any, order: int) -> Any:
+    """The certified band of a large model (:func:`~rheolin.floquet.band.band_modes`),
+    refused with :class:`~rheolin.budget.MemoryBudgetError` before anything is built when the
+    first band and the lattice search at ``order`` exceed the memory budget."""
+    from threadpoolctl import threadpool_limits
+
+    limit = resolve_budget(budget)
+    estimate = band_estimate(system, order, band)
+    if estimate > limit:
+        raise MemoryBudgetError(
+            f"the band method ({2 * system.n} first-order DOFs, lattice order {order}) needs "
+            f"an estimated {format_bytes(estimate)}, more than the memory budget of "
+            f"{format_bytes(limit)}; condense bodies (Craig-Bampton) or mesh the shafts more "
+            "coarsely, or raise the budget (RHEOLIN_MEMORY_BUDGET or `memory_budget`)"
+        )
+    with threadpool_limits(limits=1, user_api="blas"):  # many small products: one thread
+        return band_modes(system, band, limit)
+
+
+def inertial_exponents(
+    system: PeriodicSystem, modes: Any, exponents: np.ndarray, dominant: np.ndarray
+) -> np.ndarray:
+    """``exponents`` of a system in body frames, each moved to the copy of its dominant band
+    mode's inertial frequency (:func:`inertial_shifts`); unchanged otherwise."""
+    if not isinstance(modes, BandAveraged) or not system.kept("rotated_frames"):
+        return exponents
+    shift = inertial_shifts(system, modes)
+    return exponents + 1j * system.omega * shift[np.clip(dominant, 0, shift.size - 1)]
