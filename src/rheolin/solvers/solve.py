@@ -271,10 +271,10 @@ def _check_stability(
             return sol
     try:
         res = floquet(system, continuation=continuation)
-    except MemoryBudgetError:
+    except MemoryBudgetError as exc:
         if stability:  # asked for explicitly: the caller refuses with the estimate
             raise
-        sol.message += "; stability not checked: the Floquet problem exceeds the memory budget"
+        sol.message += f"; stability not checked: {exc}"
         return sol
     except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as exc:
         # a numerical failure of the check (a factorization, an eigensolver that did not
