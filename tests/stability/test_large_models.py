@@ -69,7 +69,7 @@ def test_fine_rotor_has_the_unstable_verdict_of_the_three_node_model() -> None:
     assert abs(res.max_real - ref.max_real) <= 2e-3 * abs(ref.max_real)
 
 
-@pytest.mark.parametrize("rpm", [3000.0, 4220.0, 5000.0])
+@pytest.mark.parametrize("rpm", [3000.0, 4220.0])
 def test_band_method_matches_the_dense_method_below_the_limit(rpm: float) -> None:
     """A 41-node rotor (246 DOF) in its shaft's frame: the band method (40 modes) and the
     dense lattice method (every mode) give the same verdict, and every exponent of the band
