@@ -19,6 +19,7 @@ import scipy.sparse as sp
 
 from ..errors import ModelError
 from ..system.constraints import LinearConstraint
+from ..system.frames import BodyFrame
 from ..system.periodic import PeriodicSystem
 from ._term import SpeedTerm, Term
 from .assembly import Assembled
@@ -144,6 +145,7 @@ class SpeedTemplate:
         dof = {key: 6 * v + np.arange(6) for key, v in self.node_index.items()}
         self.constraint = _links(model, dof, self.n_dof)
         self.whirl_pairs = _planes(model, dof)
+        self.frames = _frames(model, dof, plan)
         terms = self._body_terms(model)
         self.joints: dict[str, SpeedTerm] = {}
         #: speed-dependent joints: name -> (table, |speed ratio| of its body, DOFs)
@@ -317,6 +319,7 @@ class SpeedTemplate:
             constraint=self.constraint,
         )
         system.whirl_pairs = self.whirl_pairs
+        system.keep("body_frames", self.frames)
         return system
 
     def assemble(self, speed: float) -> Assembled:
@@ -375,6 +378,25 @@ def _planes(
     if not ix:
         return None
     return np.array(ix, dtype=np.int64), np.array(iy, dtype=np.int64)
+
+
+def _frames(
+    model: ModelData, dof: dict[tuple[str, int], np.ndarray], plan: SpeedPlan
+) -> tuple[BodyFrame, ...]:
+    """The rotating bodies' frames (:class:`rheolin.system.frames.BodyFrame`): spin, axis and
+    node triples, for the stability check of large models (docs/stability.md)."""
+    meshed = {
+        b for m in model.meshes.values() for b in (m["pair"].pinion_body, m["pair"].gear_body)
+    }
+    out = []
+    for b in model.bodies.values():
+        s = plan.spin.get(b.name, 0)
+        if s and len(b.positions):
+            d = np.array([dof[(b.name, i)] for i in range(len(b.positions))])
+            ax = np.asarray(b.axis, float)
+            axis = (float(ax[0]), float(ax[1]), float(ax[2]))
+            out.append(BodyFrame(b.name, int(s), axis, d.reshape(-1, 3), b.name in meshed))
+    return tuple(out)
 
 
 def _links(
