@@ -13,6 +13,7 @@ from planetary_reference import LinParker
 
 from rheolin.mechanics._term import SpeedTerm
 from rheolin.mechanics.assembly import assemble_coefficients
+from rheolin.mechanics.carrier_frame import in_carrier_frame
 from rheolin.mechanics.joints import joint_term
 from rheolin.mechanics.planetary import PlanetaryGeometry, equal_spacing
 from rheolin.mechanics.planetary_terms import (
@@ -57,14 +58,20 @@ def build(
     teeth: tuple[int, int, int] = (12, 12, 36),
     planets: int = 4,
     eps: float = 0.0,
-    damping: bool = True,
+    damping: float = 1.0,
     te: float = 0.0,
     pin_errors: tuple[np.ndarray, ...] = (),
     sun_torque: float = 0.0,
+    carrier_speed: float = 1.0,
+    out_damping: float = 0.0,
+    members: str = "inertial",
 ) -> Case:
     """The set with ``held`` member fixed (``"ring"``: sun input; ``"sun"``: ring input), mesh
     stiffness ripple ``eps``, static transmission error amplitude ``te`` [m] on every mesh,
-    pin errors per planet (radial, tangential), a static torque on the sun [N m]."""
+    pin errors per planet (radial, tangential), a static torque on the sun [N m], the carrier
+    speed [rad/s] and the damping of the axial and tilting motions (which the planar reference
+    leaves out); ``members="carrier"`` writes the sun, ring and carrier in the carrier's axes
+    too."""
     zs, zp, zr = teeth
     geo = PlanetaryGeometry(zs, zp, zr, equal_spacing(planets), 0.005, np.radians(20))
     names = [f"p{n}" for n in range(planets)]
@@ -81,7 +88,6 @@ def build(
     spin = {k: int(v / base) for k, v in ratios.items()}
     spin["planet"] = spin["p0"]
     mh = int(Fraction(mesh) / base)
-    carrier_speed = 1.0
     w1 = carrier_speed / spin["carrier"]
     radius = {
         "s": geo.base_radius(zs),
@@ -93,7 +99,7 @@ def build(
     k = {j: 1e8 * SCALE for j in "src"}
     ku = {"s": 0.2e9 * SCALE, "r": 1e9 * SCALE, "c": 0.3e9 * SCALE}
     kp, ksp, krp = 1e8 * SCALE, 5e8 * SCALE, 5e8 * SCALE
-    f = 1.0 if damping else 0.0
+    f = float(damping)  # damping scale
     c = {j: f * 0.03 * np.sqrt(k[j] * MASS[j]) for j in "src"}
     cu = {j: f * 0.01 * np.sqrt(ku[j] * I_R2[j]) for j in "src"}
     cp = f * 0.03 * np.sqrt(kp * MASS["p"])
@@ -108,12 +114,14 @@ def build(
     n_dof = 6 * (3 + planets)
     for i, j in enumerate("src"):
         dofs = 6 * i + np.arange(6)
-        terms.append(
-            RigidNode(MASS[j], np.diag([1.0, 1.0, J[j]])).speed_term(i, AXIS, spin[MEMBER[j]])
-        )
+        node = RigidNode(MASS[j], np.diag([1.0, 1.0, J[j]]))
         K = np.diag([k[j], k[j], OUT, OUT, OUT, ku[j] * radius[j] ** 2])
-        C = np.diag([c[j], c[j], 0.0, 0.0, 0.0, cu[j] * radius[j] ** 2])
-        terms.append(SpeedTerm.constant(joint_term(dofs, None, K, C)))
+        C = np.diag([c[j], c[j], *[out_damping] * 3, cu[j] * radius[j] ** 2])
+        own = [node.speed_term(i, AXIS, spin[MEMBER[j]])]
+        own.append(SpeedTerm.constant(joint_term(dofs, None, K, C)))
+        if members == "carrier":
+            own = [in_carrier_frame(t, {2 * i, 2 * i + 1}, AXIS, spin["carrier"]) for t in own]
+        terms += own
     if sun_torque:
         loads[0] = np.zeros(n_dof)
         loads[0][5] = sun_torque
@@ -128,7 +136,7 @@ def build(
         np.array([1.0, 0.0, 0.0]),
     )
     KB = np.diag([kp, kp, OUT, OUT, OUT, 0.0])
-    DB = np.diag([cp, cp, 0.0, 0.0, 0.0, 0.0])
+    DB = np.diag([cp, cp, *[out_damping] * 3, 0.0])
     planet = PlanetData(MASS["p"], np.array([1.0, 1.0, J["p"]]), KB, DB, pin_errors)
     pt, meshes = planetary_speed_terms(
         "set",
@@ -139,6 +147,7 @@ def build(
         MeshFamily(kr, cr, e_r),
         spin,
         mh,
+        member_spins=dict.fromkeys(MEMBER.values(), spin["carrier"] * (members == "inertial")),
     )
     terms += pt
     Ms, Ds, Ks, fs = assemble_coefficients([t.at(w1) for t in terms], n_dof)

@@ -195,15 +195,23 @@ class LinParker:
         return np.block([[z, np.eye(self.n)], [-Mi @ K, -Mi @ D]])
 
 
-def monodromy(state: Callable[[float], np.ndarray], period: float, n: int) -> np.ndarray:
+def monodromy(
+    state: Callable[[float], np.ndarray], period: float, n: int, repeat: int = 1
+) -> np.ndarray:
     """The state-transition matrix over ``period`` of ``x' = A(t) x`` (DOP853 on the matrix
-    ODE, tolerances near round-off)."""
+    ODE, tolerances near round-off), for ``A`` of period ``period / repeat``: one such period
+    integrated, raised to the power ``repeat``."""
 
     def rhs(t: float, x: np.ndarray) -> np.ndarray:
         return (state(t) @ x.reshape(n, n)).ravel()
 
     with np.errstate(under="ignore"):  # SciPy's smallest step at t = 0
         sol = solve_ivp(
-            rhs, (0.0, period), np.eye(n).ravel(), method="DOP853", rtol=1e-11, atol=1e-13
+            rhs,
+            (0.0, period / repeat),
+            np.eye(n).ravel(),
+            method="DOP853",
+            rtol=1e-11,
+            atol=1e-13,
         )
-    return sol.y[:, -1].reshape(n, n)
+    return np.linalg.matrix_power(sol.y[:, -1].reshape(n, n), repeat)

@@ -53,7 +53,7 @@ def _kinds(ref: LinParker, vectors: np.ndarray) -> list[str]:
 def test_reference_has_lin_parkers_modal_structure(planets):
     """Lin & Parker 1999: 6 rotational modes (simple), 6 translational modes (pairs) and 3
     planet modes of multiplicity N - 3, for equally spaced identical planets."""
-    case = build(planets=planets, teeth=(20, 20, 60), damping=False)
+    case = build(planets=planets, teeth=(20, 20, 60), damping=0.0)
     ref = case.reference
     M, _, K, _ = ref.matrices(0.0, 0.0)
     lam, V = eigh(K, M)
@@ -288,47 +288,82 @@ def test_planet_inertia_in_the_carrier_frame():
 
 
 # ------------------------------------------------------------------ the whole set
+def _mesh_periods(case) -> int:
+    """Mesh periods per carrier revolution (the reference's coefficients have the mesh's)."""
+    ratio = case.mesh_harmonic / case.spins["carrier"]
+    assert ratio == int(ratio)
+    return int(ratio)
+
+
 @pytest.mark.parametrize(
-    ("held", "eps"),
-    [("ring", 0.0), ("ring", 0.3), ("sun", 0.3)],
-    ids=["constant mesh", "ring held, parametric", "sun held, parametric"],
+    ("members", "held", "eps"),
+    [("inertial", "ring", 0.0), ("inertial", "ring", 0.3), ("carrier", "sun", 0.3)],
+    ids=[
+        "inertial members, constant mesh",
+        "inertial members, ring held, parametric",
+        "members in the carrier frame, sun held, parametric",
+    ],
 )
-def test_set_monodromy_equals_lin_parkers(held, eps):
-    """Over one carrier revolution, rheolin's planar DOFs (sun, ring and carrier inertial,
-    planets in the carrier frame) and the reference (all in the carrier frame) are related by
-    a periodic change of coordinates that is the identity at t = 0 and T: their monodromy
-    matrices have the same eigenvalues. This checks the geometry, the frame terms, the
-    gyroscopic and centripetal terms, damping on both sides and the mesh phasing at once."""
-    case = build(held=held, eps=eps)
+def test_set_monodromy_equals_lin_parkers(members, held, eps):
+    """Over one carrier revolution, rheolin's planar DOFs (planets in the carrier frame, the
+    sun, ring and carrier inertial or in the carrier frame too) and the reference (all in the
+    carrier frame) are related by a periodic change of coordinates that is the identity at
+    t = 0 and T: their monodromy matrices have the same eigenvalues. This checks the geometry,
+    the frame terms, the gyroscopic and centripetal terms, damping on both sides and the mesh
+    phasing at once."""
+    case = build(held=held, eps=eps, members=members)
     T = 2 * np.pi / case.carrier_speed
     n = 2 * case.planar.size
+    periods = _mesh_periods(case)
     if eps == 0:
         ref = expm(case.reference.state_matrix(0.0, case.carrier_speed) * T)
     else:
-        ref = monodromy(case.reference.state_function(case.carrier_speed), T, n)
-    got = monodromy(state_function(case.system, case.planar), T, n)
+        ref = monodromy(case.reference.state_function(case.carrier_speed), T, n, periods)
+    own = periods if members == "carrier" else 1  # inertial members turn at the carrier's
+    got = monodromy(state_function(case.system, case.planar), T, n, own)
     a, b = np.linalg.eigvals(ref), np.linalg.eigvals(got)
     scale = np.abs(a).max()
     assert max(np.min(np.abs(b - x)) for x in a) < 1e-9 * scale
     assert max(np.min(np.abs(a - x)) for x in b) < 1e-9 * scale
 
 
-def test_averaged_system_keeps_the_rotational_and_planet_modes():
-    """Rotational and planet modes leave the central members' translations at rest, which
-    the planets' carrier-frame DOFs couple to through +-W_c only: the time-averaged system
-    (modes, Campbell) has them exactly, gyroscopic terms included."""
-    case = build(planets=5, teeth=(20, 20, 60))
+@pytest.mark.parametrize("members", ["inertial", "carrier"])
+def test_averaged_system_modes(members):
+    """With the sun, ring and carrier in the carrier frame too, the set is time-invariant but
+    for the mesh stiffness: the time-averaged system (modes, Campbell, the static equilibrium)
+    has all of Lin & Parker's modes, gyroscopic terms included. With them inertial it keeps
+    the rotational and planet modes only (they leave the central translations at rest, to
+    which the planets couple through +-W_c)."""
+    case = build(planets=5, teeth=(20, 20, 60), members=members)
     ref = case.reference
     lam, V = eig(ref.state_matrix(0.0, case.carrier_speed))
     keep = lam.imag > 0
     lam, V = lam[keep], V[: ref.n, keep]
     kinds = np.array(_kinds(ref, V))
-    got = averaged_modes(case.system).eigenvalues
-    for kind in ("rotational", "planet"):
-        for x in lam[kinds == kind]:
-            assert np.min(np.abs(got - x)) < 1e-9 * abs(x), (kind, x)
     assert np.count_nonzero(kinds == "rotational") == 6
     assert np.count_nonzero(kinds == "planet") == 3 * (5 - 3)
+    got = averaged_modes(case.system).eigenvalues
+    assert np.count_nonzero(kinds == "translational") == 2 * 6
+    exact = ["rotational", "planet"] + (["translational"] if members == "carrier" else [])
+    for x in lam[np.isin(kinds, exact)]:
+        assert np.min(np.abs(got - x)) < 1e-9 * abs(x), x
+    if members == "inertial":
+        assert min(np.min(np.abs(got - x)) for x in lam[kinds == "translational"]) > 1e-3
+
+
+@pytest.mark.parametrize(("speed", "stable"), [(0.6, False), (0.625, True), (0.875, False)])
+def test_parametric_instability_against_the_monodromy_matrix(speed, stable):
+    """Mesh stiffness ripple 50 %, light damping: a narrow unstable band below 0.61 rad/s of
+    the carrier, stable at 0.625, a strong resonance at 0.875. rheolin's Floquet verdict
+    (lattice) and largest real part against the reference's monodromy matrix."""
+    case = build(eps=0.5, damping=0.3, carrier_speed=speed, out_damping=20.0, members="carrier")
+    T = 2 * np.pi / speed
+    periods = _mesh_periods(case)
+    phi = monodromy(case.reference.state_function(speed), T, 2 * case.planar.size, periods)
+    expected = np.log(np.abs(np.linalg.eigvals(phi))).max() / T
+    res = rl.floquet(case.system)
+    assert res.decided and bool(res.stable) == stable and bool(expected < 0) == stable
+    assert res.max_real == pytest.approx(expected, abs=1e-4)
 
 
 def test_load_sharing_with_a_pin_error():

@@ -1,21 +1,27 @@
-"""Planets in the carrier's frame, coupled to the inertial sun, ring and carrier nodes.
+"""Planetary sets in the carrier's frame: planets always, the sun, ring and carrier bodies too.
 
 Why the carrier's frame. A planet revolves with the carrier (speed ``W_c``) while it spins on its
-pin. Its DOFs are written in the carrier's axes (which are the global axes at ``t = 0``), as Lin
-& Parker write them: then the planet's inertia, its bearing and the planet side of both meshes
-are constant, the static deflection under torque (load sharing, a pin position error, the
-centrifugal load) is static, and the time-averaged system that modes, Campbell diagrams and
-the static equilibrium use keeps the planets' rotational and planet modes exact. The sun, ring
-and carrier stay inertial nodes of their bodies, which connect to shafts, bearings and housings
-like any other; only what couples them to a planet carries the rotation. Written inertially
-instead, every planet block would be periodic at ``W_c`` and its average would smear each planet
-over its orbit. The time variation is the same few harmonics either way, exact and unsampled:
-the carrier's rotation ``R(t) = P0 + P+ exp(i W_c t) + P- exp(-i W_c t)``
-(docs/rotating-bodies.md) gives ``0, +-W_c, +-2 W_c``, times the mesh harmonics.
+pin. Written in the carrier's axes (the global axes at ``t = 0``), as Lin & Parker write the
+whole set, a set on isotropic supports is time-invariant but for its mesh stiffness: its
+inertia, bearings and mesh geometry are constant, the static deflection under torque (load
+sharing, a pin error, the centrifugal load) is static, and the time-averaged system that modes,
+Campbell diagrams, the static equilibrium and the Floquet search start from has Lin & Parker's
+rotational, translational and planet modes exactly. Written inertially, every coupling of a
+planet to the sun, ring and carrier turns at ``+-W_c``; its average drops the central members'
+translations from the planets, and the lattice search, which looks for exponents near the
+averaged modes, misses the translational ones. So rheolin writes the planets in the carrier's
+axes, and the bodies carrying the sun, ring and carrier too (:func:`in_carrier_frame` turns any
+element's terms, exactly); what is left periodic is where the set meets the inertial world (an
+anisotropic support, a parallel mesh on the sun shaft), with the few harmonics
+``0, +-W_c, +-2 W_c`` of the carrier's rotation ``R(t) = P0 + P+ exp(i W_c t) + P- exp(-i W_c
+t)`` (docs/rotating-bodies.md) times the mesh harmonics, exact and unsampled. A member that
+cannot be in this frame (it belongs to another set's frame) stays coupled through ``R(t)``.
 
-A member node's inertial DOFs ``q_m`` appear in the carrier's axes as ``R6(t)^T q_m``
-(``R6 = diag(R, R)``). An element written in the carrier's axes on (member, planet) with the
-constant matrices ``X`` and ``C`` therefore acts through ``Q(t) = diag(R6(t)^T, I6)``::
+A member node whose axes turn relative to the carrier's at ``s w1`` (inertial: ``s = s_c``; in
+the carrier's frame: ``s = 0``) has its DOFs ``q_m`` appear in the carrier's axes as
+``R6(t)^T q_m`` (``R6 = diag(R, R)``, the relative rotation). An element written in the
+carrier's axes on (member, planet) with the constant matrices ``X`` and ``C`` therefore acts
+through ``Q(t) = diag(R6(t)^T, I6)``::
 
     K += Q^T X Q + Q^T C Q',     D += Q^T C Q,     f += Q^T v
 
@@ -25,8 +31,9 @@ planet bearing acts on the planet's motion relative to its pin, ``G = [-L(r_pin)
 ``X = G^T K_B G``, ``C = G^T D_B G``, and a pin position error ``epsilon`` loads it with
 ``v = G^T K_B epsilon``.
 
-A planet's own inertia follows from the inertial rigid-node terms (docs/rotating-bodies.md, the
-planet spinning at its absolute speed ``W_p``) by the change of coordinates ``q = R6(t) z``::
+A planet's own inertia, and every term of a body written in the carrier's frame, follows from
+its inertial terms (docs/rotating-bodies.md; a planet spins at its absolute speed ``W_p``) by
+the change of coordinates ``q = R6(t) z`` (:func:`in_carrier_frame`)::
 
     M~ = R6^T M R6,   D~ = R6^T (D R6 + 2 M R6'),   K~ = R6^T (K R6 + D R6' + M R6'')
 
@@ -55,6 +62,8 @@ __all__ = [
     "carried_speed_term",
     "carried_vector",
     "carrier_projection",
+    "frame_rotation",
+    "in_carrier_frame",
     "planet_bearing_term",
     "planet_gravity_load",
     "planet_inertia_term",
@@ -311,6 +320,98 @@ def _add(*series: Series) -> Series:
         for k, v in s.items():
             out[k] = out[k] + v if k in out else np.asarray(v)
     return out
+
+
+def frame_rotation(
+    dofs: ArrayLike, rotated: set[int] | frozenset[int], axis: object, spin: int
+) -> Series:
+    """Series of ``T(t)``, ``q_inertial = T z`` on a term's DOFs: ``R(t)`` on every 3-block
+    ``(3b, 3b+1, 3b+2)`` of global DOFs whose block ``b`` is in ``rotated``, the identity on
+    the others (modal DOFs, inertial nodes).
+
+    >>> T = frame_rotation([0, 1, 2, 3, 4, 5, 6], {0}, [0, 0, 1], 1)
+    >>> sorted(T), T[0][6, 6].real, T[1][0, 1]
+    ([-1, 0, 1], np.float64(1.0), np.complex128(0.5j))
+    """
+    d = np.asarray(dofs, dtype=np.int64).ravel()
+    R = rotation_series(axis, spin)
+    out: Series = {k: np.zeros((d.size, d.size), dtype=complex) for k in R}
+    out[0] = out.get(0, np.zeros((d.size, d.size), dtype=complex))
+    where = {int(g): i for i, g in enumerate(d)}
+    done: set[int] = set()
+    for i, g in enumerate(d):
+        b = int(g) // 3
+        if b not in rotated:
+            out[0][i, i] += 1.0
+            continue
+        if b in done:
+            continue
+        done.add(b)
+        try:
+            local = [where[3 * b + c] for c in range(3)]
+        except KeyError:
+            raise ModelError(
+                f"a term holds only part of the 3-vector at DOFs {3 * b}..{3 * b + 2}; it "
+                "cannot be turned into the carrier's frame"
+            ) from None
+        for k, P in R.items():
+            out[k][np.ix_(local, local)] += P
+    return out
+
+
+def in_carrier_frame(
+    term: SpeedTerm, rotated: set[int] | frozenset[int], axis: object, spin: int
+) -> SpeedTerm:
+    """A speed term with the DOF 3-blocks ``rotated`` written in the carrier's axes.
+
+    With ``q = T(t) z`` (:func:`frame_rotation`) the equations, projected on ``T^T``, become
+    ``M~ = T^T M T``, ``D~ = T^T (D T + 2 M T')``, ``K~ = T^T (K T + D T' + M T'')``,
+    ``f~ = T^T f``. ``T'`` is linear in ``w1`` and ``T''`` quadratic, so each power of ``w1``
+    maps to one power: ``D^(p) T'`` joins ``K^(p+1)``, ``M T'`` joins ``D^(1)`` and ``M T''``
+    joins ``K^(2)``. A term touching no rotated block is returned as it is.
+
+    Examples
+    --------
+    A mass on an isotropic spring to ground, seen from axes turning at ``W``: Coriolis
+    ``2 m W [e]x`` and centripetal ``-m W^2`` appear, the spring stays.
+
+    >>> t = SpeedTerm(np.arange(3), M={0: {0: np.eye(3)}}, K={0: {0: 4 * np.eye(3)}})
+    >>> c = in_carrier_frame(t, {0}, [0, 0, 1], 1).at(2.0)
+    >>> c.D[0][:2, :2].real + 0.0, np.diag(c.K[0]).real
+    (array([[ 0., -4.], [ 4.,  0.]]), array([0., 0., 4.]))
+    """
+    d = np.asarray(term.dofs, dtype=np.int64).ravel()
+    if not any(int(g) // 3 in rotated for g in d):
+        return term
+    T = frame_rotation(d, rotated, axis, spin)
+    dT, ddT = derivative(T, 1.0), derivative(T, 1.0, 2)
+    M, D, K, f = term.M, term.D, term.K, term.f
+    if any(p != 0 for p in M):
+        raise ModelError("a mass that depends on the speed cannot be turned into a frame")
+    out = SpeedTerm(term.dofs)
+    for p, X in M.items():
+        out.M[p] = clean_series(_sandwich(T, X))
+        if dT:
+            _accumulate(out.D, 1, {k: 2 * v for k, v in _sandwich(T, X, dT).items()})
+            _accumulate(out.K, 2, _sandwich(T, X, ddT))
+    for p, X in D.items():
+        _accumulate(out.D, p, _sandwich(T, X))
+        if dT:
+            _accumulate(out.K, p + 1, _sandwich(T, X, dT))
+    for p, X in K.items():
+        _accumulate(out.K, p, _sandwich(T, X))
+    for p, v in f.items():
+        out.f[p] = clean_series(series_product(_transpose(T), v, np.matmul))
+    for table in (out.D, out.K):
+        for p in list(table):
+            table[p] = clean_series(table[p])
+    if max(out.K, default=0) > 2:
+        raise ModelError("a term's stiffness would be of power > 2 in the speed")
+    return out
+
+
+def _accumulate(table: dict[int, Series], power: int, series: Series) -> None:
+    table[power] = _add(table.get(power, {}), series)
 
 
 def planet_gravity_load(mass: float, gravity: ArrayLike, axis: object, carrier_spin: int) -> Series:

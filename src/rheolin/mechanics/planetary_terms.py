@@ -114,6 +114,7 @@ def planetary_speed_terms(
     mesh_harmonic: int,
     flank: int = 1,
     ring_phase: float = 0.0,
+    member_spins: Mapping[str, int] | None = None,
 ) -> tuple[list[SpeedTerm], dict[str, SetMesh]]:
     """Every planet's inertia, bearing and meshes as speed terms.
 
@@ -132,6 +133,11 @@ def planetary_speed_terms(
         +1: the sun pushes the planets in the direction it turns relative to the carrier.
     ring_phase
         Phase of planet 0's ring mesh after its sun mesh [rad of the mesh cycle].
+    member_spins
+        How the axes of the ``"sun"``, ``"ring"`` and ``"carrier"`` nodes' DOFs turn relative
+        to the carrier (spin harmonics): 0 for a member written in this carrier's axes (the
+        default for all three), ``s_carrier`` for an inertial one, ``s_carrier - s_other``
+        for one written in another coaxial set's carrier axes.
 
     Returns
     -------
@@ -144,6 +150,7 @@ def planetary_speed_terms(
     if errors and len(errors) != geometry.planets:
         raise ModelError(f"`pin_errors` needs one entry per planet ({geometry.planets})")
     s_c = int(spins["carrier"])
+    turn = {"sun": 0, "ring": 0, "carrier": 0, **(member_spins or {})}
     rel = int(np.sign(spins["sun"] - s_c))
     sigma = flank * (rel or 1)  # the flank in contact, in the carrier's sense of rotation
     x_s, x_r, x_c = nodes.sun[1], nodes.ring[1], nodes.carrier[1]
@@ -168,7 +175,9 @@ def planetary_speed_terms(
             local[: given.size] = given
             err = T @ local
         terms.append(
-            planet_bearing_term(nodes.carrier[0], dofs, c.position - x_c, e, s_c, KB, DB, err)
+            planet_bearing_term(
+                nodes.carrier[0], dofs, c.position - x_c, e, turn["carrier"], KB, DB, err
+            )
         )
         for kind, member, fam, w, gamma in (
             ("sun", nodes.sun[0], sun_mesh, c.sun, gamma_s[n]),
@@ -180,7 +189,7 @@ def planetary_speed_terms(
                 dofs,
                 w,
                 e,
-                s_c,
+                turn[kind],
                 mesh_harmonic,
                 phased(fam.stiffness, gamma),
                 fam.damping,
@@ -188,6 +197,6 @@ def planetary_speed_terms(
             )
             terms.append(term)
             meshes[f"{name}.{kind}{n}"] = SetMesh(
-                term.dofs, carried_vector(w, e, s_c), mesh_harmonic, term
+                term.dofs, carried_vector(w, e, turn[kind]), mesh_harmonic, term
             )
     return terms, meshes
