@@ -22,6 +22,8 @@ from rheolin.mechanics.carrier_frame import (
     planet_mesh_term,
 )
 from rheolin.mechanics.planetary import PlanetaryGeometry, equal_spacing, mesh_phases, phased
+from rheolin.mechanics.planetary_modes import SetDofs, planetary_mode_kinds
+from rheolin.mechanics.rotation import rotation_series
 from rheolin.mechanics.willis import carried_pair, fixed_pair, solve_speeds
 from rheolin.stability.modes import averaged_modes
 
@@ -391,3 +393,54 @@ def test_load_sharing_with_a_pin_error():
             assert k[n] * np.real(delta) == pytest.approx(k[n] * grads[n] @ u, rel=1e-9)
     loads = [ks[n] * gs[n] @ u for n in range(4)]
     assert (max(loads) - min(loads)) / np.mean(loads) > 0.03  # the error matters
+
+
+def test_transmission_error_response_against_time_integration():
+    """Phased mesh stiffness ripple and transmission error: the harmonic-balance steady state
+    against the BDF time integration of the same system (``method="transient"``), and the
+    same set solved with inertial sun, ring and carrier, turned back by R(t): the change of
+    frame is exact for the forced response too."""
+    kw = dict(eps=0.2, te=1e-3, damping=10.0, out_damping=20.0)  # scaled model
+    case = build(members="carrier", **kw)
+    H = rl.HarmonicSet.closure(case.system, order=4)
+    hb = rl.solve(case.system, H, method="gmres", stability=True)
+    assert hb.success and hb.stable
+    td = rl.solve(case.system, H, method="transient")
+    assert td.success
+    peak = np.abs(hb.q).max()
+    for h in (case.mesh_harmonic, 2 * case.mesh_harmonic):
+        assert np.abs(hb.harmonic(h) - td.harmonic(h)).max() < 1e-4 * peak
+    inertial = build(members="inertial", **kw)
+    Hi = rl.HarmonicSet.closure(inertial.system, order=4)
+    q = rl.solve(inertial.system, Hi, method="gmres", stability=False)
+    assert q.success
+    R = rotation_series(AXIS, case.spins["carrier"])  # the members' q = R6(t) z
+    for h in (case.mesh_harmonic, case.mesh_harmonic + 1, case.mesh_harmonic - 1):
+        expected = np.zeros(hb.q.shape[1], dtype=complex)
+        for k, P in R.items():
+            if h - k in hb.harmonics:
+                expected += np.kron(np.eye(2 * 3 + 2 * 4), P) @ hb.harmonic(h - k)
+        expected[18:] = hb.harmonic(h)[18:] if h in hb.harmonics else 0  # planets: unchanged
+        assert np.abs(q.harmonic(h) - expected).max() < 1e-8 * peak
+
+
+def test_mode_labels_are_lin_parkers_types():
+    """Labels of rheolin's averaged modes (set in the carrier frame, five planets) against the
+    types of the reference's modes at the same eigenvalues, and their counts."""
+    case = build(planets=5, teeth=(20, 20, 60), members="carrier")
+    ref = case.reference
+    lam, V = eig(ref.state_matrix(0.0, case.carrier_speed))
+    keep = lam.imag > 0
+    lam, kinds = lam[keep], np.array(_kinds(ref, V[: ref.n, keep]))
+    modes = averaged_modes(case.system)
+    node = np.arange(3)
+    dofs = SetDofs(
+        np.concatenate([6 * node, 6 * node + 1]), 6 * node + 5, np.arange(18, case.system.n)
+    )
+    labels = planetary_mode_kinds(modes.shapes, case.system.M[0].diagonal(), dofs)
+    planar = [i for i, x in enumerate(modes.eigenvalues) if np.min(np.abs(lam - x)) < 1e-9]
+    assert len(planar) == lam.size
+    for i in planar:
+        assert labels[i] == kinds[np.argmin(np.abs(lam - modes.eigenvalues[i]))]
+    assert sorted(labels[planar]).count("planet") == 6
+    assert sorted(labels[planar]).count("translational") == 12
