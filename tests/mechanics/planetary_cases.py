@@ -13,7 +13,7 @@ from planetary_reference import LinParker
 
 from rheolin.mechanics._term import SpeedTerm
 from rheolin.mechanics.assembly import assemble_coefficients
-from rheolin.mechanics.carrier_frame import in_carrier_frame
+from rheolin.mechanics.frames import in_frame
 from rheolin.mechanics.joints import joint_term
 from rheolin.mechanics.planetary import PlanetaryGeometry, equal_spacing
 from rheolin.mechanics.planetary_terms import (
@@ -120,7 +120,7 @@ def build(
         own = [node.speed_term(i, AXIS, spin[MEMBER[j]])]
         own.append(SpeedTerm.constant(joint_term(dofs, None, K, C)))
         if members == "carrier":
-            own = [in_carrier_frame(t, {2 * i, 2 * i + 1}, AXIS, spin["carrier"]) for t in own]
+            own = [in_frame(t, {2 * i, 2 * i + 1}, AXIS, spin["carrier"]) for t in own]
         terms += own
     if sun_torque:
         loads[0] = np.zeros(n_dof)

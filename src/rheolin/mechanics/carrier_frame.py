@@ -10,9 +10,9 @@ rotational, translational and planet modes exactly. Written inertially, every co
 planet to the sun, ring and carrier turns at ``+-W_c``; its average drops the central members'
 translations from the planets, and the lattice search, which looks for exponents near the
 averaged modes, misses the translational ones. So rheolin writes the planets in the carrier's
-axes, and the bodies carrying the sun, ring and carrier too (:func:`in_carrier_frame` turns any
-element's terms, exactly); what is left periodic is where the set meets the inertial world (an
-anisotropic support, a parallel mesh on the sun shaft), with the few harmonics
+axes, and the bodies carrying the sun, ring and carrier too (:mod:`rheolin.mechanics.frames`
+turns any element's terms, exactly); what is left periodic is where the set meets the inertial
+world (an anisotropic support, a parallel mesh on the sun shaft), with the few harmonics
 ``0, +-W_c, +-2 W_c`` of the carrier's rotation ``R(t) = P0 + P+ exp(i W_c t) + P- exp(-i W_c
 t)`` (docs/rotating-bodies.md) times the mesh harmonics, exact and unsampled. A member that
 cannot be in this frame (it belongs to another set's frame) stays coupled through ``R(t)``.
@@ -33,7 +33,7 @@ planet bearing acts on the planet's motion relative to its pin, ``G = [-L(r_pin)
 
 A planet's own inertia, and every term of a body written in the carrier's frame, follows from
 its inertial terms (docs/rotating-bodies.md; a planet spins at its absolute speed ``W_p``) by
-the change of coordinates ``q = R6(t) z`` (:func:`in_carrier_frame`)::
+the change of coordinates ``q = R6(t) z`` (:func:`~rheolin.mechanics.frames.in_frame`)::
 
     M~ = R6^T M R6,   D~ = R6^T (D R6 + 2 M R6'),   K~ = R6^T (K R6 + D R6' + M R6'')
 
@@ -53,17 +53,23 @@ from numpy.typing import ArrayLike
 
 from ..errors import ModelError
 from ._term import SpeedTerm
+from .frames import in_frame, sandwich, transpose
 from .gears import mesh_convolve
 from .joints import lever
-from .rigid import rigid_node_coefficients
-from .rotation import clean_series, derivative, rotation_series, series_product, unit_axis
+from .rigid import RigidNode
+from .rotation import (
+    add_series,
+    clean_series,
+    derivative,
+    rotation_series,
+    series_product,
+    unit_axis,
+)
 
 __all__ = [
     "carried_speed_term",
     "carried_vector",
     "carrier_projection",
-    "frame_rotation",
-    "in_carrier_frame",
     "planet_bearing_term",
     "planet_gravity_load",
     "planet_inertia_term",
@@ -71,10 +77,6 @@ __all__ = [
 ]
 
 Series = dict[int, np.ndarray]
-
-
-def _block6(R: Series) -> Series:
-    return {k: np.kron(np.eye(2), P) for k, P in R.items()}
 
 
 def carrier_projection(axis: object, spin: int) -> Series:
@@ -94,15 +96,6 @@ def carrier_projection(axis: object, spin: int) -> Series:
     out[0] = out.get(0, np.zeros((12, 12), dtype=complex))
     out[0][6:, 6:] += np.eye(6)
     return out
-
-
-def _transpose(series: Series) -> Series:
-    return {k: np.asarray(v).T for k, v in series.items()}
-
-
-def _sandwich(Q: Series, X: Series, right: Series | None = None) -> Series:
-    """``Q^T X Q`` (or ``Q^T X right``) as an exact convolution."""
-    return series_product(series_product(_transpose(Q), X), Q if right is None else right)
 
 
 def carried_speed_term(
@@ -147,15 +140,15 @@ def carried_speed_term(
     out = SpeedTerm(dofs)
     X = {int(k): np.asarray(v) for k, v in stiffness.items() if np.any(v)}
     if X:
-        out.K[0] = clean_series(_sandwich(Q, X))
+        out.K[0] = clean_series(sandwich(Q, X))
     if damping is not None and np.any(damping):
         C = {0: np.asarray(damping, dtype=float)}
-        out.D[0] = clean_series(_sandwich(Q, C))
+        out.D[0] = clean_series(sandwich(Q, C))
         dQ = derivative(Q, 1.0)
         if dQ:
-            out.K[1] = clean_series(_sandwich(Q, C, dQ))
+            out.K[1] = clean_series(sandwich(Q, C, dQ))
     if load:
-        QT = _transpose(Q)
+        QT = transpose(Q)
         f = series_product(QT, {int(k): np.asarray(v) for k, v in load.items()}, np.matmul)
         out.f[0] = clean_series(f)
     return out
@@ -170,7 +163,7 @@ def carried_vector(w: np.ndarray, axis: object, spin: int) -> Series:
     ([-1, 0, 1], -0.5j, (-1+0j))
     """
     w = np.asarray(w, dtype=float).reshape(12)
-    QT = _transpose(carrier_projection(axis, spin))
+    QT = transpose(carrier_projection(axis, spin))
     return {k: v @ w for k, v in QT.items() if np.any(v @ w)}
 
 
@@ -291,127 +284,20 @@ def planet_inertia_term(
     """
     e = unit_axis(axis)
     J = np.asarray(inertia, dtype=float)
-    J = np.diag(J) if J.shape == (3,) else J
-    M, D, K, _ = rigid_node_coefficients(mass, J, np.zeros(3), e, spin, 1.0)
-    T = _block6(rotation_series(e, carrier_spin))
-    dT = derivative(T, 1.0)
-    ddT = derivative(T, 1.0, 2)
-    sand = lambda X, right: _sandwich(T, X, right)  # noqa: E731
-    Mc = sand(M, T)
-    Dc = series_product(_transpose(T), series_product(D, T))
-    Kc = series_product(_transpose(T), series_product(K, T))
-    if dT:
-        Dc = _add(Dc, {k: 2 * v for k, v in sand(M, dT).items()})
-        Kc = _add(Kc, sand(D, dT), sand(M, ddT))
+    node = RigidNode(mass, np.diag(J) if J.shape == (3,) else J)
+    dofs = np.asarray(planet_dofs, dtype=np.int64).reshape(6)
+    own = node.speed_term(0, e, spin)
+    own.dofs = dofs
+    blocks = {int(dofs[0]) // 3, int(dofs[3]) // 3}
+    out = in_frame(own, blocks, e, carrier_spin)
     r = np.asarray(orbit, dtype=float).reshape(3)
     r = r - (r @ e) * e
     f = np.zeros(6)
     f[:3] = float(mass) * carrier_spin**2 * r
-    dofs = np.asarray(planet_dofs, dtype=np.int64)
-    out = SpeedTerm(dofs, M={0: clean_series(Mc)}, D={1: clean_series(Dc)}, K={2: clean_series(Kc)})
+    out.f = {p: v for p, v in out.f.items() if any(np.any(x) for x in v.values())}
     if np.any(f):
-        out.f[2] = {0: f}
+        out.f[2] = add_series(out.f.get(2, {}), {0: f})
     return out
-
-
-def _add(*series: Series) -> Series:
-    out: Series = {}
-    for s in series:
-        for k, v in s.items():
-            out[k] = out[k] + v if k in out else np.asarray(v)
-    return out
-
-
-def frame_rotation(
-    dofs: ArrayLike, rotated: set[int] | frozenset[int], axis: object, spin: int
-) -> Series:
-    """Series of ``T(t)``, ``q_inertial = T z`` on a term's DOFs: ``R(t)`` on every 3-block
-    ``(3b, 3b+1, 3b+2)`` of global DOFs whose block ``b`` is in ``rotated``, the identity on
-    the others (modal DOFs, inertial nodes).
-
-    >>> T = frame_rotation([0, 1, 2, 3, 4, 5, 6], {0}, [0, 0, 1], 1)
-    >>> sorted(T), T[0][6, 6].real, T[1][0, 1]
-    ([-1, 0, 1], np.float64(1.0), np.complex128(0.5j))
-    """
-    d = np.asarray(dofs, dtype=np.int64).ravel()
-    R = rotation_series(axis, spin)
-    out: Series = {k: np.zeros((d.size, d.size), dtype=complex) for k in R}
-    out[0] = out.get(0, np.zeros((d.size, d.size), dtype=complex))
-    where = {int(g): i for i, g in enumerate(d)}
-    done: set[int] = set()
-    for i, g in enumerate(d):
-        b = int(g) // 3
-        if b not in rotated:
-            out[0][i, i] += 1.0
-            continue
-        if b in done:
-            continue
-        done.add(b)
-        try:
-            local = [where[3 * b + c] for c in range(3)]
-        except KeyError:
-            raise ModelError(
-                f"a term holds only part of the 3-vector at DOFs {3 * b}..{3 * b + 2}; it "
-                "cannot be turned into the carrier's frame"
-            ) from None
-        for k, P in R.items():
-            out[k][np.ix_(local, local)] += P
-    return out
-
-
-def in_carrier_frame(
-    term: SpeedTerm, rotated: set[int] | frozenset[int], axis: object, spin: int
-) -> SpeedTerm:
-    """A speed term with the DOF 3-blocks ``rotated`` written in the carrier's axes.
-
-    With ``q = T(t) z`` (:func:`frame_rotation`) the equations, projected on ``T^T``, become
-    ``M~ = T^T M T``, ``D~ = T^T (D T + 2 M T')``, ``K~ = T^T (K T + D T' + M T'')``,
-    ``f~ = T^T f``. ``T'`` is linear in ``w1`` and ``T''`` quadratic, so each power of ``w1``
-    maps to one power: ``D^(p) T'`` joins ``K^(p+1)``, ``M T'`` joins ``D^(1)`` and ``M T''``
-    joins ``K^(2)``. A term touching no rotated block is returned as it is.
-
-    Examples
-    --------
-    A mass on an isotropic spring to ground, seen from axes turning at ``W``: Coriolis
-    ``2 m W [e]x`` and centripetal ``-m W^2`` appear, the spring stays.
-
-    >>> t = SpeedTerm(np.arange(3), M={0: {0: np.eye(3)}}, K={0: {0: 4 * np.eye(3)}})
-    >>> c = in_carrier_frame(t, {0}, [0, 0, 1], 1).at(2.0)
-    >>> c.D[0][:2, :2].real + 0.0, np.diag(c.K[0]).real
-    (array([[ 0., -4.], [ 4.,  0.]]), array([0., 0., 4.]))
-    """
-    d = np.asarray(term.dofs, dtype=np.int64).ravel()
-    if not any(int(g) // 3 in rotated for g in d):
-        return term
-    T = frame_rotation(d, rotated, axis, spin)
-    dT, ddT = derivative(T, 1.0), derivative(T, 1.0, 2)
-    M, D, K, f = term.M, term.D, term.K, term.f
-    if any(p != 0 for p in M):
-        raise ModelError("a mass that depends on the speed cannot be turned into a frame")
-    out = SpeedTerm(term.dofs)
-    for p, X in M.items():
-        out.M[p] = clean_series(_sandwich(T, X))
-        if dT:
-            _accumulate(out.D, 1, {k: 2 * v for k, v in _sandwich(T, X, dT).items()})
-            _accumulate(out.K, 2, _sandwich(T, X, ddT))
-    for p, X in D.items():
-        _accumulate(out.D, p, _sandwich(T, X))
-        if dT:
-            _accumulate(out.K, p + 1, _sandwich(T, X, dT))
-    for p, X in K.items():
-        _accumulate(out.K, p, _sandwich(T, X))
-    for p, v in f.items():
-        out.f[p] = clean_series(series_product(_transpose(T), v, np.matmul))
-    for table in (out.D, out.K):
-        for p in list(table):
-            table[p] = clean_series(table[p])
-    if max(out.K, default=0) > 2:
-        raise ModelError("a term's stiffness would be of power > 2 in the speed")
-    return out
-
-
-def _accumulate(table: dict[int, Series], power: int, series: Series) -> None:
-    table[power] = _add(table.get(power, {}), series)
 
 
 def planet_gravity_load(mass: float, gravity: ArrayLike, axis: object, carrier_spin: int) -> Series:
