@@ -18,7 +18,7 @@ from fractions import Fraction
 
 from ..errors import ModelError
 
-__all__ = ["SpeedConstraint", "carried_pair", "fixed_pair", "solve_speeds"]
+__all__ = ["SpeedConstraint", "carried_pair", "fixed_pair", "set_constraints", "solve_speeds"]
 
 
 @dataclass(frozen=True)
@@ -66,6 +66,28 @@ def carried_pair(
     coef = {a: Fraction(za), b: Fraction(sign * zb)}
     coef[carrier] = coef.get(carrier, Fraction(0)) - za - sign * zb
     return SpeedConstraint(tuple(coef.items()), label)
+
+
+def set_constraints(
+    label: str,
+    sun: str,
+    ring: str,
+    carrier: str,
+    planets: Sequence[str],
+    teeth: tuple[int, int, int],
+) -> list[SpeedConstraint]:
+    """The sun and ring meshes of every planet of a set (teeth: sun, planet, ring).
+
+    >>> cs = set_constraints("set 'p'", "s", "r", "c", ["p0", "p1", "p2"], (21, 39, 99))
+    >>> solve_speeds("c", cs, fixed_ratios={"r": 0})["s"]
+    Fraction(40, 7)
+    """
+    zs, zp, zr = teeth
+    out = []
+    for p in planets:
+        out.append(carried_pair(sun, p, carrier, zs, zp, False, label))
+        out.append(carried_pair(ring, p, carrier, zr, zp, True, label))
+    return out
 
 
 def solve_speeds(
