@@ -234,3 +234,50 @@ def state_function(system: PeriodicSystem, keep: np.ndarray):
         return np.vstack([top, bottom])
 
     return A
+
+
+def model_case(
+    held: str = "ring",
+    teeth: tuple[int, int, int] = (12, 12, 36),
+    planets: int = 4,
+    eps: float = 0.0,
+    carrier_speed: float = 1.0,
+    out_damping: float = 0.0,
+    frame: str = "carrier",
+    **extra,
+):
+    """:func:`build`'s set through ``Model.add_planetary`` (sun, ring and carrier rigid bodies
+    on bearings to ground), and the input speed that gives ``carrier_speed``."""
+    from rheolin.mechanics.model import Model
+
+    zs, zp, zr = teeth
+    drive = "sun" if held == "ring" else "ring"
+    m = Model(input_body=drive)
+    g = PlanetaryGeometry(zs, zp, zr, equal_spacing(planets), 0.005, np.radians(20))
+    radius = {"s": g.base_radius(zs), "r": g.base_radius(zr), "c": g.carrier_radius,
+              "p": g.base_radius(zp)}  # fmt: skip
+    k = 1e8 * SCALE
+    ku = {"s": 0.2e9 * SCALE, "r": 1e9 * SCALE, "c": 0.3e9 * SCALE}
+    for j in "src":
+        J = I_R2[j] * radius[j] ** 2
+        m.add_rigid_body(MEMBER[j], (0, 0, 0), MASS[j], (1.0, 1.0, J),
+                         speed_ratio=0 if MEMBER[j] == held else None)  # fmt: skip
+        c = 0.03 * np.sqrt(k * MASS[j])
+        cu = 0.01 * np.sqrt(ku[j] * I_R2[j])
+        m.add_bearing(f"{j}_support", MEMBER[j], 0, [k, k, OUT, OUT, OUT, ku[j] * radius[j] ** 2],
+                      [c, c, *[out_damping] * 3, cu * radius[j] ** 2], components=None)  # fmt: skip
+    kp, ksp, krp = 1e8 * SCALE, 5e8 * SCALE, 5e8 * SCALE
+    cp = 0.03 * np.sqrt(kp * MASS["p"])
+    m.add_planetary(
+        "set", "sun", 0, "ring", 0, "carrier", 0, zs, zp, zr, 0.005,
+        planet={"mass": MASS["p"], "inertia": [1.0, 1.0, I_R2["p"] * radius["p"] ** 2]},
+        planet_bearing={"stiffness": [kp, kp, OUT, OUT, OUT],
+                        "damping": [cp, cp, *[out_damping] * 3]},
+        sun_mesh={"stiffness": {0: ksp, 1: eps * ksp / 2 * np.exp(0.3j), 2: eps * ksp / 5},
+                  "damping": 0.02 * np.sqrt(ksp * MASS["p"])},
+        ring_mesh={"stiffness": {0: krp, 1: eps * krp / 2 * np.exp(-0.7j)},
+                   "damping": 0.01 * np.sqrt(krp * MASS["p"])},
+        planets=planets, frame=frame, **extra,
+    )  # fmt: skip
+    speed = carrier_speed / float(m.speed_plan().ratios["carrier"])
+    return m, speed

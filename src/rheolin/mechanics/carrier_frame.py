@@ -70,6 +70,7 @@ __all__ = [
     "carried_speed_term",
     "carried_vector",
     "carrier_projection",
+    "centripetal_load",
     "planet_bearing_term",
     "planet_gravity_load",
     "planet_inertia_term",
@@ -290,13 +291,31 @@ def planet_inertia_term(
     own.dofs = dofs
     blocks = {int(dofs[0]) // 3, int(dofs[3]) // 3}
     out = in_frame(own, blocks, e, carrier_spin)
+    out.f = {p: v for p, v in out.f.items() if any(np.any(x) for x in v.values())}
+    orbit_load = centripetal_load(dofs, mass, e, carrier_spin, orbit)
+    if orbit_load.f:
+        out.f[2] = add_series(out.f.get(2, {}), orbit_load.f[2])
+    return out
+
+
+def centripetal_load(
+    planet_dofs: ArrayLike, mass: float, axis: object, carrier_spin: int, orbit: ArrayLike
+) -> SpeedTerm:
+    """The force ``m W_c^2 r`` that keeps a planet on its orbit ``orbit`` (its centre from the
+    carrier's axis [m]), a static load on its bearing in the carrier's axes (quadratic in the
+    speed).
+
+    >>> centripetal_load(range(6), 2.0, [0, 0, 1], 3, [0.1, 0.0, 0.5]).f[2][0][:3]
+    array([1.8, 0. , 0. ])
+    """
+    e = unit_axis(axis)
     r = np.asarray(orbit, dtype=float).reshape(3)
     r = r - (r @ e) * e
     f = np.zeros(6)
     f[:3] = float(mass) * carrier_spin**2 * r
-    out.f = {p: v for p, v in out.f.items() if any(np.any(x) for x in v.values())}
+    out = SpeedTerm(np.asarray(planet_dofs, dtype=np.int64).reshape(6))
     if np.any(f):
-        out.f[2] = add_series(out.f.get(2, {}), {0: f})
+        out.f[2] = {0: f}
     return out
 
 

@@ -1,7 +1,7 @@
 """The speed terms of a whole planetary set: planets, their bearings and their meshes.
 
 The set (:class:`~rheolin.mechanics.planetary.PlanetaryGeometry`) sits on the carrier's axis;
-its sun, ring and carrier are nodes of ordinary bodies (inertial DOFs) and every planet is a
+its sun, ring and carrier are nodes of ordinary bodies and every planet is a
 node of its own in the carrier's axes (:mod:`rheolin.mechanics.carrier_frame` says why). Each
 planet contributes its inertia, its bearing on the carrier's pin and a sun and a ring mesh,
 phased by its angle (:func:`~rheolin.mechanics.planetary.mesh_phases`).
@@ -18,6 +18,7 @@ from ..errors import ModelError
 from ._term import SpeedTerm
 from .carrier_frame import (
     carried_vector,
+    centripetal_load,
     planet_bearing_term,
     planet_inertia_term,
     planet_mesh_term,
@@ -115,6 +116,7 @@ def planetary_speed_terms(
     flank: int = 1,
     ring_phase: float = 0.0,
     member_spins: Mapping[str, int] | None = None,
+    inertia: bool = True,
 ) -> tuple[list[SpeedTerm], dict[str, SetMesh]]:
     """Every planet's inertia, bearing and meshes as speed terms.
 
@@ -138,6 +140,9 @@ def planetary_speed_terms(
         to the carrier (spin harmonics): 0 for a member written in this carrier's axes (the
         default for all three), ``s_carrier`` for an inertial one, ``s_carrier - s_other``
         for one written in another coaxial set's carrier axes.
+    inertia
+        Include the planets' inertia (False: the model's planet bodies carry it; the load
+        that keeps them on their orbit is included either way).
 
     Returns
     -------
@@ -161,11 +166,14 @@ def planetary_speed_terms(
     meshes: dict[str, SetMesh] = {}
     for n, (c, dofs) in enumerate(zip(contacts, nodes.planets, strict=True)):
         T = _local_axes(c.radial, c.tangential, e)
-        inertia = np.asarray(planet.inertia, dtype=float)
-        J = T[:3, :3] @ (np.diag(inertia) if inertia.shape == (3,) else inertia) @ T[:3, :3].T
-        terms.append(
-            planet_inertia_term(dofs, planet.mass, J, e, spins["planet"], s_c, c.position - x_c)
-        )
+        Jl = np.asarray(planet.inertia, dtype=float)
+        J = T[:3, :3] @ (np.diag(Jl) if Jl.shape == (3,) else Jl) @ T[:3, :3].T
+        if inertia:
+            terms.append(
+                planet_inertia_term(dofs, planet.mass, J, e, spins["planet"], s_c, c.position - x_c)
+            )
+        else:
+            terms.append(centripetal_load(dofs, planet.mass, e, s_c, c.position - x_c))
         KB = T @ np.asarray(planet.bearing_stiffness, dtype=float) @ T.T
         DB = None if planet.bearing_damping is None else T @ planet.bearing_damping @ T.T
         err = None
