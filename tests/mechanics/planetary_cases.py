@@ -244,6 +244,7 @@ def model_case(
     carrier_speed: float = 1.0,
     out_damping: float = 0.0,
     frame: str = "carrier",
+    te: float = 0.0,
     **extra,
 ):
     """:func:`build`'s set through ``Model.add_planetary`` (sun, ring and carrier rigid bodies
@@ -274,9 +275,11 @@ def model_case(
         planet_bearing={"stiffness": [kp, kp, OUT, OUT, OUT],
                         "damping": [cp, cp, *[out_damping] * 3]},
         sun_mesh={"stiffness": {0: ksp, 1: eps * ksp / 2 * np.exp(0.3j), 2: eps * ksp / 5},
-                  "damping": 0.02 * np.sqrt(ksp * MASS["p"])},
+                  "damping": 0.02 * np.sqrt(ksp * MASS["p"]),
+                  "transmission_error": {1: te / 2} if te else None},
         ring_mesh={"stiffness": {0: krp, 1: eps * krp / 2 * np.exp(-0.7j)},
-                   "damping": 0.01 * np.sqrt(krp * MASS["p"])},
+                   "damping": 0.01 * np.sqrt(krp * MASS["p"]),
+                   "transmission_error": {1: te / 2 * np.exp(1j)} if te else None},
         planets=planets, frame=frame, **extra,
     )  # fmt: skip
     speed = carrier_speed / float(m.speed_plan().ratios["carrier"])

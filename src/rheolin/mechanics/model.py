@@ -35,6 +35,7 @@ from .gears import mesh_record
 from .items import Body, positive, recorded
 from .joints import bearing_record, link_components
 from .loads import gravity_vector, moment_at_node, torque_value
+from .planetary_assembly import refuse_in_frames
 from .planetary_model import PlanetaryTable
 from .preload import OperatingPoint, preloaded_template
 from .preload import operating_point as solve_operating_point
@@ -440,6 +441,7 @@ class Model(PlanetaryTable):
         if key not in self._operating:
             if len(self._operating) > 64:
                 self._operating.clear()
+            refuse_in_frames(self)
             self._operating[key] = solve_operating_point(self, key[0])
         return self._operating[key]
 

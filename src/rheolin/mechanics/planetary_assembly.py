@@ -26,7 +26,7 @@ from .planetary_terms import SetMesh, SetNodes, planetary_speed_terms
 from .rotation import rotation_series
 from .speeds import SpeedPlan
 
-__all__ = ["Frames", "model_frames", "set_meshes_for_output", "set_terms"]
+__all__ = ["Frames", "model_frames", "refuse_in_frames", "set_meshes_for_output", "set_terms"]
 
 Series = dict[int, np.ndarray]
 
@@ -45,6 +45,7 @@ class Frames:
 
     sets: dict[str, tuple[np.ndarray, int, frozenset[int]]] = field(default_factory=dict)
     bodies: dict[str, str] = field(default_factory=dict)
+    _rotations: dict[int, Series] = field(default_factory=dict, repr=False)
 
     def __bool__(self) -> bool:
         return any(blocks for _, _, blocks in self.sets.values())
@@ -74,7 +75,12 @@ class Frames:
         return out
 
     def rotation(self, n_dof: int) -> Series:
-        """``T(t)`` on every DOF (sparse series): global axes = ``T`` times the DOFs."""
+        """``T(t)`` on every DOF (sparse series, kept): global axes = ``T`` times the DOFs."""
+        if n_dof not in self._rotations:
+            self._rotations[n_dof] = self._rotation(n_dof)
+        return self._rotations[n_dof]
+
+    def _rotation(self, n_dof: int) -> Series:
         out: Series = {}
         dofs = np.arange(n_dof)
         for axis, spin, blocks in self.sets.values():
@@ -123,11 +129,37 @@ class Frames:
         return {k: (np.real(v) if k == 0 else v) for k, v in out.items() if np.any(v != 0)}
 
 
+def refuse_in_frames(model: ModelData) -> None:
+    """Refuse what a carrier frame cannot hold: a load-dependent bearing (its static load
+    turns there) or speed-dependent coefficients on a body in a carrier frame."""
+    _refuse(model, _owners(model))
+
+
 def model_frames(model: ModelData, plan: SpeedPlan, dof: Mapping[tuple[str, int], np.ndarray]
                  ) -> Frames:  # fmt: skip
     """Which bodies are in which set's carrier frame, checked against what a frame cannot
     hold (load-dependent joints, speed tables, links across frames)."""
     frames = Frames()
+    owner = _owners(model)
+    _refuse(model, owner)
+    for name, s in model.planetary.items():
+        e = model.bodies[s.carrier[0]].axis
+        blocks: set[int] = set()
+        for body, f in owner.items():
+            if f != name:
+                continue
+            for i in range(len(model.bodies[body].positions)):
+                d = dof[(body, i)]
+                blocks |= {int(d[0]) // 3, int(d[3]) // 3}
+        frames.sets[name] = (e, plan.spin[s.carrier[0]], frozenset(blocks))
+    frames.bodies = owner
+    return frames
+
+
+def _owners(model: ModelData) -> dict[str, str]:
+    """``{body: set}`` of the bodies in a carrier frame: planets, the members of sets written
+    in their carrier's axes (the first set claims a shared member), and bodies rigidly linked
+    to them."""
     owner: dict[str, str] = {}
     for name, s in model.planetary.items():
         for p in s.planets:
@@ -166,19 +198,7 @@ def model_frames(model: ModelData, plan: SpeedPlan, dof: Mapping[tuple[str, int]
                 f"rigid link {lname!r} in the carrier frame of {f!r} must join nodes on one "
                 "line along the carrier's axis"
             )
-    _refuse(model, owner)
-    for name, s in model.planetary.items():
-        e = model.bodies[s.carrier[0]].axis
-        blocks: set[int] = set()
-        for body, f in owner.items():
-            if f != name:
-                continue
-            for i in range(len(model.bodies[body].positions)):
-                d = dof[(body, i)]
-                blocks |= {int(d[0]) // 3, int(d[3]) // 3}
-        frames.sets[name] = (e, plan.spin[s.carrier[0]], frozenset(blocks))
-    frames.bodies = owner
-    return frames
+    return owner
 
 
 def _refuse(model: ModelData, owner: Mapping[str, str]) -> None:

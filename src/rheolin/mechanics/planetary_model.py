@@ -243,7 +243,11 @@ class PlanetaryTable(ModelData):
         e = check_members([self.bodies[b].axis for b, _ in refs.values()], nodes)
         if (planets is None) == (planet_angles is None):
             raise ModelError("give `planets` (equally spaced) or `planet_angles`, one of them")
-        angles = equal_spacing(planets) if planets is not None else tuple(planet_angles or ())
+        angles = (
+            equal_spacing(planets)
+            if planets is not None
+            else tuple(float(x) for x in np.asarray(planet_angles, dtype=float).ravel())
+        )
         geo = PlanetaryGeometry(
             sun_teeth, planet_teeth, ring_teeth, angles, module, pressure_angle, helix_angle,
             carrier_radius or 0.0,

@@ -23,7 +23,7 @@ from ..mechanics.assembly import Assembled
 from ..mechanics.joints import COMPONENTS
 from ..solvers.solution import Solution
 from .compute import OperatingPoint
-from .outputs import bearing_force_array, transmission_error_array
+from .outputs import bearing_force_array, global_displacements, transmission_error_array
 
 __all__ = [
     "complex_values",
@@ -112,7 +112,7 @@ def point_dataset(
     order = harmonics * float(a.base_ratio)
     nodes = list(a.node_index)
     idx = np.array([6 * a.node_index[k] + np.arange(6) for k in nodes])  # (node, 6)
-    q = sol.q[keep][:, idx]  # (harmonic, node, component)
+    q = global_displacements(sol, a)[:, idx]  # (harmonic, node, component), global axes
     coords: dict[str, Any] = {
         "harmonic": ("harmonic", harmonics),
         "frequency": ("harmonic", freq, {"units": "Hz"}),

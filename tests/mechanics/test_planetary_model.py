@@ -1,0 +1,126 @@
+"""Planetary sets through ``Model.add_planetary``: the model equals the term-level set that
+test_planetary.py validates against Lin & Parker's model, outputs do not depend on the frame
+the set is written in, and bad sets are refused naming the field."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from planetary_cases import build, model_case
+
+import rheolin as rl
+from rheolin.errors import ModelError
+from rheolin.results.outputs import (
+    bearing_force_array,
+    global_displacements,
+    transmission_error_array,
+)
+
+
+@pytest.mark.parametrize(("frame", "members"), [("carrier", "carrier"), ("inertial", "inertial")])
+def test_model_set_is_the_validated_set(frame, members):
+    m, speed = model_case(eps=0.3, frame=frame)
+    a = m.assemble(speed)
+    ref = build(eps=0.3, members=members).system
+    assert a.omega == pytest.approx(ref.omega)
+    for name in "MDK":
+        A, B = getattr(a.system, name), getattr(ref, name)
+        assert set(A) == set(B)
+        scale = max(abs(B[k]).max() for k in B)
+        for k in B:
+            assert abs(A[k] - B[k]).max() <= 1e-14 * scale
+
+
+def test_outputs_do_not_depend_on_the_frame():
+    """The same set solved with its members in the carrier frame and in global axes:
+    displacements (turned back to global axes), bearing forces on the supports and every
+    mesh's dynamic transmission error agree."""
+    out = {}
+    for frame in ("carrier", "inertial"):
+        m, speed = model_case(eps=0.2, te=1e-3, frame=frame, out_damping=20.0)
+        a = m.assemble(speed)
+        H = rl.HarmonicSet.closure(a.system, order=3, generators=a.generators)
+        sol = rl.solve(a.system, H, method="gmres", stability=False)
+        assert sol.success
+        out[frame] = (a, sol)
+    (a1, s1), (a2, s2) = out["carrier"], out["inertial"]
+    common = np.intersect1d(s1.harmonics[s1.harmonics >= 0], s2.harmonics[s2.harmonics >= 0])
+    i1 = np.searchsorted(s1.harmonics[s1.harmonics >= 0], common)
+    i2 = np.searchsorted(s2.harmonics[s2.harmonics >= 0], common)
+    q1, q2 = global_displacements(s1, a1)[i1], global_displacements(s2, a2)[i2]
+    assert np.abs(q1).max() > 0
+    assert np.abs(q1 - q2).max() < 1e-6 * np.abs(q1).max()
+    for name in a1.joints:
+        f1 = bearing_force_array(s1, a1, name)[1][i1]
+        f2 = bearing_force_array(s2, a2, name)[1][i2]
+        assert np.abs(f1 - f2).max() < 1e-6 * np.abs(f1).max(), name
+    for name in a1.meshes:
+        d1 = transmission_error_array(s1, a1, name)[1][i1]
+        d2 = transmission_error_array(s2, a2, name)[1][i2]
+        assert np.abs(d1 - d2).max() < 1e-6 * np.abs(d1).max(), name
+
+
+def _set(m=None, **kw):
+    """A small set (sun input, ring held) with ``kw`` replacing add_planetary's arguments."""
+    from rheolin.mechanics.model import Model
+
+    if m is None:
+        m = Model(input_body="sun")
+        for name, ratio in (("sun", None), ("ring", 0), ("carrier", None)):
+            m.add_rigid_body(name, (0, 0, 0), 2.0, (0.1, 0.1, 0.2), speed_ratio=ratio)
+            m.add_bearing(f"{name}_b", name, 0, 1e8, 10.0, components=None)
+    args = dict(
+        name="set", sun_body="sun", sun_node=0, ring_body="ring", ring_node=0,
+        carrier_body="carrier", carrier_node=0, sun_teeth=20, planet_teeth=20, ring_teeth=60,
+        module=0.003, planets=4, planet={"mass": 0.5, "inertia": [1e-3, 1e-3, 2e-3]},
+        planet_bearing={"stiffness": [1e8, 1e8, 1e8, 1e5, 1e5]},
+        sun_mesh={"stiffness": 3e8}, ring_mesh={"stiffness": 4e8},
+    )  # fmt: skip
+    args.update(kw)
+    m.add_planetary(**{k: v for k, v in args.items() if v is not ...})
+    return m
+
+
+@pytest.mark.parametrize(
+    ("kw", "field"),
+    [
+        ({"planets": 3}, "`ring_teeth`: 3 equally spaced planets do not assemble"),
+        ({"ring_teeth": 58}, "`ring_teeth`: 58 teeth: a ring smaller than the sun plus two"),
+        ({"planets": ..., "planet_angles": np.radians([0, 45, 180])}, "planets 0 and 1 .* collide"),
+        ({"planets": ..., "planet_angles": [0.0, 0.6, 3.0]}, r"`planet_angles\[1\]`: 34.3775 deg"),
+        ({"planet_angles": [0.0, np.pi]}, "give `planets` .* or `planet_angles`, one of them"),
+        ({"sun_mesh": {"stifness": 3e8}}, "`sun_mesh.stifness` is not a key"),
+        (
+            {"planet_bearing": {"stiffness": [1e8, 1e8], "components": ["ux", "uy"]}},
+            "`planet_bearing.stiffness`: the planets need a positive stiffness on uz",
+        ),
+        ({"frame": "ring"}, "`frame` must be one of"),
+        ({"ring_body": "sun"}, "must be three bodies"),
+        ({"pin_errors": [[0, 1e-5]]}, "`pin_errors` needs one"),
+    ],
+)
+def test_bad_sets_are_refused_naming_the_field(kw, field):
+    with pytest.raises(ModelError, match=field):
+        _set(**kw)
+
+
+def test_a_set_nothing_holds_is_refused():
+    from rheolin.mechanics.model import Model
+
+    m = Model(input_body="sun")
+    for name in ("sun", "ring", "carrier"):
+        m.add_rigid_body(name, (0, 0, 0), 2.0, (0.1, 0.1, 0.2))
+        m.add_bearing(f"{name}_b", name, 0, 1e8, 10.0, components=None)
+    _set(m)
+    with pytest.raises(ModelError, match=r"does not determine the speeds of .*planetary set"):
+        m.assemble(100.0)
+
+
+def test_load_dependent_bearing_in_the_carrier_frame_is_refused():
+    m = _set()
+    m.add_rolling_bearing("rb", "carrier", 0, law="radial", stiffness=1e10)
+    with pytest.raises(ModelError, match="rolling bearing 'rb': body 'carrier' is in the carrier"):
+        m.assemble(100.0)
+    m = _set(frame="inertial")
+    m.add_rolling_bearing("rb", "carrier", 0, law="radial", stiffness=1e10)
+    m.assemble(100.0)  # inertial members may carry one
