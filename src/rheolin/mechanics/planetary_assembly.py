@@ -26,7 +26,14 @@ from .planetary_terms import SetMesh, SetNodes, planetary_speed_terms
 from .rotation import rotation_series
 from .speeds import SpeedPlan
 
-__all__ = ["Frames", "model_frames", "refuse_in_frames", "set_meshes_for_output", "set_terms"]
+__all__ = [
+    "Frames",
+    "harmonic_generators",
+    "model_frames",
+    "refuse_in_frames",
+    "set_meshes_for_output",
+    "set_terms",
+]
 
 Series = dict[int, np.ndarray]
 
@@ -127,6 +134,17 @@ class Frames:
                 v = Ma @ gb
                 out[a + b] = out[a + b] + v if a + b in out else v
         return {k: (np.real(v) if k == 0 else v) for k, v in out.items() if np.any(v != 0)}
+
+
+def harmonic_generators(model: ModelData, plan: SpeedPlan) -> list[int]:
+    """The plan's generators without the planets' spins: an axisymmetric planet in its
+    carrier's axes adds no harmonic of its own (its mesh frequencies are the set's)."""
+    planets = {b for s in model.planetary.values() for b in s.planets}
+    if not planets:
+        return plan.generators
+    others = {abs(s) for b, s in plan.spin.items() if b not in planets}
+    drop = {abs(plan.spin[b]) for b in planets} - others
+    return [g for g in plan.generators if g not in drop]
 
 
 def refuse_in_frames(model: ModelData) -> None:

@@ -143,6 +143,16 @@ def planet_data(
         if p.get("mass") is None or p.get("inertia") is None:
             raise ModelError("`planet`: give `mass` and `inertia` together")
         mass, inertia = float(p["mass"]), np.asarray(p["inertia"], dtype=float)
+        J = np.diag(inertia) if inertia.shape == (3,) else inertia
+        if (
+            J.shape != (3, 3)
+            or not np.isclose(J[0, 0], J[1, 1], rtol=1e-9)
+            or np.any(np.abs(J - np.diag(np.diag(J))) > 1e-12 * np.abs(J).max())
+        ):
+            raise ModelError(
+                "`planet.inertia`: a planet is axisymmetric: give (J_d, J_d, J_p) about its "
+                f"radial, tangential and axial axes, got {p['inertia']!r}"
+            )
     elif p.get("width") is not None:
         rho = material_constants(p.get("material"), {"density": p.get("density")}, "planet")
         node = disk(

@@ -28,7 +28,12 @@ from .gears import gear_mesh_term, line_of_action
 from .items import ModelData
 from .joints import COMPONENTS, coupling_speed_term, lever, pair_block
 from .loads import gravity_load, harmonic_force_term
-from .planetary_assembly import model_frames, set_meshes_for_output, set_terms
+from .planetary_assembly import (
+    harmonic_generators,
+    model_frames,
+    set_meshes_for_output,
+    set_terms,
+)
 from .shaft import element_matrices
 from .speeds import SpeedPlan, speed_plan, train_speeds
 
@@ -144,6 +149,7 @@ class SpeedTemplate:
                 self.n_dof += modes
         dof = {key: 6 * v + np.arange(6) for key, v in self.node_index.items()}
         self.frames = model_frames(model, plan, dof)
+        self.generators = harmonic_generators(model, plan)
         self.constraint = _links(model, dof, self.n_dof)
         self.whirl_pairs = _planes(model, dof)
         terms = self._body_terms(model)
@@ -350,7 +356,7 @@ class SpeedTemplate:
             self.plan.base,
             speed,
             self.plan,
-            self.plan.generators,
+            self.generators,
             self.dof_labels,
             self.node_index,
             joints,
