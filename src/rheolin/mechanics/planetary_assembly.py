@@ -48,14 +48,21 @@ class Frames:
         ``{set: (axis, carrier spin, blocks)}``.
     bodies
         ``{body: set}`` for every body in a carrier's frame (planets included).
+    planet_bodies
+        The planets.
     """
 
     sets: dict[str, tuple[np.ndarray, int, frozenset[int]]] = field(default_factory=dict)
     bodies: dict[str, str] = field(default_factory=dict)
+    planet_bodies: tuple[str, ...] = ()
     _rotations: dict[int, Series] = field(default_factory=dict, repr=False)
 
     def __bool__(self) -> bool:
         return any(blocks for _, _, blocks in self.sets.values())
+
+    def planets(self) -> list[str]:
+        """The planet bodies."""
+        return list(self.planet_bodies)
 
     def turn(self, term: SpeedTerm) -> SpeedTerm:
         """The term with its blocks in carrier frames written there."""
@@ -171,6 +178,7 @@ def model_frames(model: ModelData, plan: SpeedPlan, dof: Mapping[tuple[str, int]
                 blocks |= {int(d[0]) // 3, int(d[3]) // 3}
         frames.sets[name] = (e, plan.spin[s.carrier[0]], frozenset(blocks))
     frames.bodies = owner
+    frames.planet_bodies = tuple(p for s in model.planetary.values() for p in s.planets)
     return frames
 
 

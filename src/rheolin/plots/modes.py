@@ -65,13 +65,20 @@ def plot_mode_shapes(
     >>> p.stat().st_size > 10000
     True
     """
-    from ..stability.modes import averaged_modes, mode_energy, mode_kind, whirl_ratio
+    from ..stability.modes import (
+        averaged_modes,
+        mode_energy,
+        mode_kind,
+        planetary_kinds,
+        whirl_ratio,
+    )
 
     a = model.assemble(float(speed))
     modes = averaged_modes(a.system, first + min(int(n_modes), MAX_MODES))
     axes = {b: model.bodies[b].axis for b in model.bodies}
     ratio = whirl_ratio(modes.shapes, a.dof_labels, axes, a.plan.spin)
     kinds = mode_kind(mode_energy(modes.shapes, a.dof_labels, axes, a.system.M[0]), ratio)
+    kinds = planetary_kinds(kinds, modes.shapes, model, a)
     picks = list(range(first, modes.eigenvalues.size))[:MAX_MODES]
     fig, grid = new_figure(2, 3, (13, 8))
     for a_ in grid.ravel():

@@ -213,9 +213,15 @@ def netcdf_engine() -> str:
 
 def frequency_markers(a: Assembled) -> dict[str, float]:
     """Named frequencies [Hz] for plots: each shaft's speed (1x) and each mesh frequency."""
-    out = {f"{b} 1x": abs(s) * a.omega / (2 * math.pi) for b, s in a.plan.spin.items() if s}
+    planets = set() if a.frames is None else set(a.frames.planets())
+    out = {
+        f"{b} 1x": abs(s) * a.omega / (2 * math.pi)
+        for b, s in a.plan.spin.items()
+        if s and b not in planets
+    }
     for name, (_, _, n) in a.meshes.items():
-        out[f"{name} mesh"] = abs(n) * a.omega / (2 * math.pi)
+        label = name.split(".")[0] if name.split(".")[0] in a.plan.sets else name  # one per set
+        out[f"{label} mesh"] = abs(n) * a.omega / (2 * math.pi)
     return out
 
 
