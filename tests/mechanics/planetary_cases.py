@@ -65,6 +65,7 @@ def build(
     carrier_speed: float = 1.0,
     out_damping: float = 0.0,
     members: str = "inertial",
+    scale: float = SCALE,
 ) -> Case:
     """The set with ``held`` member fixed (``"ring"``: sun input; ``"sun"``: ring input), mesh
     stiffness ripple ``eps``, static transmission error amplitude ``te`` [m] on every mesh,
@@ -96,9 +97,9 @@ def build(
         "p": geo.base_radius(zp),
     }
     J = {j: I_R2[j] * radius[j] ** 2 for j in MASS}
-    k = {j: 1e8 * SCALE for j in "src"}
-    ku = {"s": 0.2e9 * SCALE, "r": 1e9 * SCALE, "c": 0.3e9 * SCALE}
-    kp, ksp, krp = 1e8 * SCALE, 5e8 * SCALE, 5e8 * SCALE
+    k = {j: 1e8 * scale for j in "src"}
+    ku = {"s": 0.2e9 * scale, "r": 1e9 * scale, "c": 0.3e9 * scale}
+    kp, ksp, krp = 1e8 * scale, 5e8 * scale, 5e8 * scale
     f = float(damping)  # damping scale
     c = {j: f * 0.03 * np.sqrt(k[j] * MASS[j]) for j in "src"}
     cu = {j: f * 0.01 * np.sqrt(ku[j] * I_R2[j]) for j in "src"}
@@ -245,6 +246,7 @@ def model_case(
     out_damping: float = 0.0,
     frame: str = "carrier",
     te: float = 0.0,
+    scale: float = SCALE,
     **extra,
 ):
     """:func:`build`'s set through ``Model.add_planetary`` (sun, ring and carrier rigid bodies
@@ -257,8 +259,8 @@ def model_case(
     g = PlanetaryGeometry(zs, zp, zr, equal_spacing(planets), 0.005, np.radians(20))
     radius = {"s": g.base_radius(zs), "r": g.base_radius(zr), "c": g.carrier_radius,
               "p": g.base_radius(zp)}  # fmt: skip
-    k = 1e8 * SCALE
-    ku = {"s": 0.2e9 * SCALE, "r": 1e9 * SCALE, "c": 0.3e9 * SCALE}
+    k = 1e8 * scale
+    ku = {"s": 0.2e9 * scale, "r": 1e9 * scale, "c": 0.3e9 * scale}
     for j in "src":
         J = I_R2[j] * radius[j] ** 2
         m.add_rigid_body(MEMBER[j], (0, 0, 0), MASS[j], (1.0, 1.0, J),
@@ -267,7 +269,7 @@ def model_case(
         cu = 0.01 * np.sqrt(ku[j] * I_R2[j])
         m.add_bearing(f"{j}_support", MEMBER[j], 0, [k, k, OUT, OUT, OUT, ku[j] * radius[j] ** 2],
                       [c, c, *[out_damping] * 3, cu * radius[j] ** 2], components=None)  # fmt: skip
-    kp, ksp, krp = 1e8 * SCALE, 5e8 * SCALE, 5e8 * SCALE
+    kp, ksp, krp = 1e8 * scale, 5e8 * scale, 5e8 * scale
     cp = 0.03 * np.sqrt(kp * MASS["p"])
     m.add_planetary(
         "set", "sun", 0, "ring", 0, "carrier", 0, zs, zp, zr, 0.005,

@@ -124,3 +124,30 @@ def test_load_dependent_bearing_in_the_carrier_frame_is_refused():
     m = _set(frame="inertial")
     m.add_rolling_bearing("rb", "carrier", 0, law="radial", stiffness=1e10)
     m.assemble(100.0)  # inertial members may carry one
+
+
+def test_load_sharing_under_torque_with_a_pin_error():
+    """``Model.load_sharing`` (the static equilibrium under a sun torque, a 20 um tangential
+    pin error on planet 0, the planets' orbit) against the reference's static carrier-frame
+    solution; without the error the four planets share equally."""
+    err = [[0.0, 20e-6], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]]
+    m, speed = model_case(pin_errors=err, scale=1.0, carrier_speed=50.0)
+    m.add_torque("drive", "sun", 0, 200.0)
+    ls = m.load_sharing(speed)["set"]
+    case = build(pin_errors=tuple(np.array(e) for e in err), sun_torque=200.0, scale=1.0,
+                 carrier_speed=50.0)  # fmt: skip
+    ref = case.reference
+    _, _, K, f = ref.matrices(0.0, case.carrier_speed)
+    u = np.linalg.solve(K, f)
+    gs, gr, _ = ref.gradients()
+    k_s, k_r = ref.ks(0.0), ref.kr(0.0)
+    assert np.allclose(ls.sun, [k_s[n] * gs[n] @ u for n in range(4)], rtol=1e-9)
+    assert np.allclose(ls.ring, [k_r[n] * gr[n] @ u for n in range(4)], rtol=1e-9)
+    assert ls.factor > 1.5
+    m, speed = model_case(scale=1.0, carrier_speed=50.0)
+    m.add_torque("drive", "sun", 0, 200.0)
+    even = m.load_sharing(speed)["set"]
+    assert even.factor == pytest.approx(1.0, abs=1e-9)
+    r_bs = build(scale=1.0).geometry.base_radius(12)
+    # the sun torque reaches the meshes (the sun's own torsional support takes its share)
+    assert 0 < even.sun.sum() * r_bs < 200.0

@@ -187,8 +187,50 @@ def planet_data(
     return PlanetData(mass, inertia, K, D, errors)
 
 
+@dataclass(frozen=True)
+class LoadSharing:
+    """The mean (static) mesh forces of a set's planets and how evenly they share the load.
+
+    Attributes
+    ----------
+    sun, ring
+        Mean force [N] along the line of action of each planet's sun and ring mesh.
+    factor
+        ``N max(F_sun) / sum(F_sun)``: 1 for equal sharing.
+    """
+
+    sun: np.ndarray
+    ring: np.ndarray
+
+    @property
+    def factor(self) -> float:
+        return float(self.sun.size * np.max(self.sun) / np.sum(self.sun))
+
+
 class PlanetaryTable(ModelData):
     """The vocabulary of planetary sets (a part of :class:`~rheolin.mechanics.model.Model`)."""
+
+    def load_sharing(self, speed: float) -> dict[str, LoadSharing]:
+        """Every set's static mesh forces at input ``speed`` [rad/s], from the static
+        equilibrium (:meth:`operating_point`) under the static loads: torques, pin errors,
+        the planets' orbit, gravity's mean. With the set's bodies in the carrier frame it is
+        exact for supports that are isotropic about the axis; with them inertial the central
+        members' translations are averaged out.
+        """
+        a = self.assemble(speed)  # type: ignore[attr-defined]
+        u = self.operating_point(speed).displacement
+        out = {}
+        for name, s in self.planetary.items():
+            forces = {}
+            for kind, fam in (("sun", s.sun_mesh), ("ring", s.ring_mesh)):
+                f = []
+                for n in range(len(s.planets)):
+                    term, w, _ = a.meshes[f"{name}.{kind}{n}"]
+                    g = np.real(w.get(0, 0 * term.dofs)) if isinstance(w, dict) else w
+                    f.append(float(np.real(fam.stiffness.get(0, 0))) * float(g @ u[term.dofs]))
+                forces[kind] = np.array(f)
+            out[name] = LoadSharing(forces["sun"], forces["ring"])
+        return out
 
     @recorded
     def add_planetary(
