@@ -72,7 +72,6 @@ __all__ = [
     "carrier_projection",
     "centripetal_load",
     "planet_bearing_term",
-    "planet_gravity_load",
     "planet_inertia_term",
     "planet_mesh_term",
 ]
@@ -316,22 +315,4 @@ def centripetal_load(
     out = SpeedTerm(np.asarray(planet_dofs, dtype=np.int64).reshape(6))
     if np.any(f):
         out.f[2] = {0: f}
-    return out
-
-
-def planet_gravity_load(mass: float, gravity: ArrayLike, axis: object, carrier_spin: int) -> Series:
-    """Gravity on a planet in the carrier's axes, ``m R(t)^T g`` (6-vector series).
-
-    >>> f = planet_gravity_load(2.0, [0, -9.81, 0], [0, 0, 1], 1)
-    >>> sorted(f), complex(f[1][0])
-    ([-1, 1], 9.81j)
-    """
-    g = np.asarray(gravity, dtype=float).reshape(3)
-    R = rotation_series(axis, carrier_spin)
-    out: Series = {}
-    for k, P in R.items():
-        v = np.zeros(6, dtype=complex)
-        v[:3] = float(mass) * P.T @ g
-        if np.any(v):
-            out[k] = v
     return out
