@@ -6,15 +6,16 @@ What it measures (2 cores unless the machine has more):
 1. one point of each model, serial, one BLAS thread (the wind turbine at 22.1 rpm, the gearbox
    at 3000 rpm, each with its file's harmonic settings): the steady-state solve and the Floquet
    verdict, each cold and per DOF, and their ratios (wind turbine / gearbox);
-2. a run-up of the wind turbine over ``--points`` speeds, every ``1000 / points``-th of the
-   1000-speed grid 4..24 rpm (its operating range), response and verdicts, on 2 worker
-   processes (``LocalCluster``): wall time, the verdicts, the unstable ranges; the 1000-speed
-   run-up is extrapolated from the rate (marked "est.");
-3. with ``--full``, the whole 1000-speed run-up on 2 workers.
+2. a stretch of each model's 1000-speed run-up as a study worker computes it (32 consecutive
+   speeds from the middle of the grid, two continuation blocks of 16, serial): CPU seconds per
+   point and their ratio; the 1000-speed run-up of the wind turbine (4..24 rpm) on 2 cores is
+   estimated from its rate (marked "est.");
+3. with ``--full``, the whole 1000-speed run-up on 2 worker processes (``LocalCluster``): wall
+   time, the workers' CPU time, the verdicts.
 
 Usage::
 
-    python bench/wind_turbine.py [--points 20] [--full] [--out bench/results/wind_turbine.md]
+    python bench/wind_turbine.py [--full] [--out bench/results/wind_turbine.md]
 """
 
 from __future__ import annotations
@@ -34,7 +35,6 @@ RPM = np.pi / 30
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--points", type=int, default=20, help="speeds of the measured subset")
     ap.add_argument("--out", type=Path, default=None, help="write the results (markdown)")
     ap.add_argument("--full", action="store_true", help="also run the 1000-speed run-up")
     args = ap.parse_args()
@@ -78,34 +78,38 @@ def main() -> None:
         f"gearbox {gb['verdict']}"
     )
     say()
-    full = np.linspace(4.0, 24.0, 1000) * RPM
-    subset = full[:: max(1, full.size // args.points)][: args.points]
-    spec = StudySpec.create(example_path("wind-turbine"), subset)
-    run = _run(spec)
-    say(f"## 2. Run-up over {subset.size} speeds (every {full.size // subset.size}th of 4..24 rpm)")
+    grids = {
+        "wind-turbine": np.linspace(4.0, 24.0, 1000) * RPM,
+        "gearbox": np.linspace(500.0, 6000.0, 1000) * RPM,
+    }
+    rate = {name: _stretch(name, grid) for name, grid in grids.items()}
+    say("## 2. A stretch of each run-up: 32 consecutive speeds, as a study worker computes them")
     say()
-    say("| | value |")
-    say("|---|---|")
-    say(f"| wall, 2 workers | {run['wall']:.1f} s |")
-    say(f"| points phase | {run['points']:.1f} s ({run['per_point']:.2f} s per point per worker) |")
-    say(f"| verdicts | {run['decided']} of {subset.size} decided, {run['stable']} stable |")
-    say(f"| unstable ranges | {run['ranges'] or 'none'} |")
-    say(f"| peak RSS per worker | {run['rss']} MB |")
-    est = full.size * run["points"] / subset.size + run["start"] + run["maps"]
+    say("| model | grid | CPU per point [s] | per DOF [ms] |")
+    say("|---|---|---|---|")
+    for name, grid in grids.items():
+        n = wt["n"] if name == "wind-turbine" else gb["n"]
+        say(
+            f"| {name} | {grid[0] / RPM:g}..{grid[-1] / RPM:g} rpm | {rate[name]:.2f} | "
+            f"{1e3 * rate[name] / n:.1f} |"
+        )
     say()
+    est = 1000 * rate["wind-turbine"] / 2
     say(
-        f"1000-speed run-up on 2 workers, est.: {est:.0f} s = {est / 60:.1f} min (goal: at most "
-        "10 min)"
+        f"per point, wind turbine / gearbox: {rate['wind-turbine'] / rate['gearbox']:.2f}x; "
+        f"1000-speed wind-turbine run-up on 2 cores, est.: {est:.0f} s = {est / 60:.1f} min of "
+        "CPU per core (goal: at most 10 min)"
     )
     say()
     if args.full:
-        whole = _run(StudySpec.create(example_path("wind-turbine"), full))
+        whole = _run(StudySpec.create(example_path("wind-turbine"), grids["wind-turbine"]))
         say("## 3. The whole run-up: 1000 speeds, 4..24 rpm, 2 workers")
         say()
         say("| | value |")
         say("|---|---|")
         say(f"| wall, cluster start to results on disk | **{whole['wall']:.0f} s** |")
         say(f"| points phase | {whole['points']:.0f} s |")
+        say(f"| CPU time of the workers | {whole['cpu']} s |")
         say(f"| verdicts | {whole['decided']} of 1000 decided, {whole['stable']} stable |")
         say(f"| unstable ranges | {whole['ranges'] or 'none'} |")
         say(f"| peak RSS per worker | {whole['rss']} MB |")
@@ -144,6 +148,20 @@ def _one_point(name: str, speed: float) -> dict:
     }
 
 
+def _stretch(name: str, grid: np.ndarray) -> float:
+    """CPU seconds per point of 32 consecutive speeds of a 1000-speed study (2 blocks)."""
+    from rheolin.budget import memory_budget
+    from rheolin.data import example_path
+    from rheolin.study import StudySpec
+    from rheolin.study.worker import ChunkTask, compute_chunk
+
+    spec = StudySpec.create(example_path(name), grid)
+    first = (grid.size // 2) // spec.block * spec.block
+    t = time.process_time()
+    compute_chunk(ChunkTask(spec, 0, list(range(first, first + 32)), memory_budget()))
+    return (time.process_time() - t) / 32
+
+
 def _run(spec) -> dict:
     from rheolin.study import run_study
     from rheolin.study.executor import local_cluster
@@ -159,6 +177,7 @@ def _run(spec) -> dict:
         start = time.perf_counter() - t0
         res = run_study(spec, out=folder, client=client, progress=progress)
         rss = sorted(v / 1024 for v in client.run(_maxrss).values())
+        cpu = sorted(client.run(_cpu).values())
     wall = time.perf_counter() - t0
     end = marks.get("maps", t0 + wall)
     points = end - marks["points"]
@@ -180,11 +199,17 @@ def _run(spec) -> dict:
         stable=stable,
         ranges="; ".join(ranges),
         rss=", ".join(f"{m:.0f}" for m in rss),
+        cpu=", ".join(f"{c:.0f}" for c in cpu),
     )
 
 
 def _maxrss() -> int:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+
+
+def _cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
 
 
 if __name__ == "__main__":

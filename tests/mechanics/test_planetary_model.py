@@ -152,3 +152,27 @@ def test_load_sharing_under_torque_with_a_pin_error():
     r_bs = build(scale=1.0).geometry.base_radius(12)
     # the sun torque reaches the meshes (the sun's own torsional support takes its share)
     assert 0 < even.sun.sum() * r_bs < 200.0
+
+
+def test_wind_turbine_example_at_rated_speed():
+    """The example's rated point: the steady state converges, the verdict is decided stable,
+    the three planets' sun meshes deflect alike at the mesh frequency (21 sun teeth on 3 equally
+    spaced planets: in phase, a rotational excitation), and the planetary mesh frequency is the
+    ring's 99 teeth times the rotor speed."""
+    from rheolin.data import example_path
+    from rheolin.io import read_model
+    from rheolin.results import solve_point
+
+    lm = read_model(example_path("wind-turbine"))
+    h = lm.spec.harmonics
+    speed = 22.1 * np.pi / 30
+    p = solve_point(lm.model, speed, order=h.order, max_order=h.max_order)
+    assert p.solution.success and p.solution.stable
+    assert p.solution.floquet.decided
+    a = p.assembled
+    assert a.plan.sets["stage1"] * a.omega == pytest.approx(99 * speed, rel=1e-12)
+    n, _ = transmission_error_array(p.solution, a, "stage1.sun0")
+    at = np.searchsorted(n, a.plan.sets["stage1"])
+    d = [transmission_error_array(p.solution, a, f"stage1.sun{k}")[1][at] for k in range(3)]
+    assert abs(d[0]) > 1e-7
+    assert d[1] == pytest.approx(d[0], rel=1e-6) and d[2] == pytest.approx(d[0], rel=1e-6)
