@@ -28,6 +28,7 @@ import xarray as xr
 from ..io.atomic import atomic_write
 from ..results.dataset import write_dataset
 from ..results.schema import SCHEMA_VERSION
+from ..results.units import significant
 from .store import CheckpointStore
 
 __all__ = ["plot_name", "resonances", "sweep_table", "write_results"]
@@ -78,8 +79,8 @@ def sweep_table(result: Any) -> dict[str, Any]:
             ranges.append(
                 {
                     "parameters": values,
-                    "lower_rpm": r.lower * RPM,
-                    "upper_rpm": r.upper * RPM,
+                    "lower_rpm": significant(r.lower * RPM),
+                    "upper_rpm": significant(r.upper * RPM),
                     "open_below": r.lower_open,
                     "open_above": r.upper_open,
                     "max_real_per_s": r.max_real,
@@ -94,7 +95,7 @@ def sweep_table(result: Any) -> dict[str, Any]:
         failed.append(
             {
                 "parameters": {p.path: p.values[i] for p, i in spec.assignments(combo)},
-                "speed_rpm": float(spec.speeds[spec.speed_of(point)]) * RPM,
+                "speed_rpm": significant(float(spec.speeds[spec.speed_of(point)]) * RPM),
                 "message": message,
             }
         )
@@ -109,7 +110,7 @@ def sweep_table(result: Any) -> dict[str, Any]:
             {"path": p.path, "field": p.field, "unit": p.unit or "SI", "values": list(p.values)}
             for p in spec.parameters
         ],
-        "speeds_rpm": (spec.speeds * RPM).tolist(),
+        "speeds_rpm": [significant(x) for x in spec.speeds * RPM],
         "success": ds["success"].values.astype(bool).tolist(),
         "status": ds["status"].values.tolist(),
         "iterations": ds["iterations"].values.tolist(),
@@ -150,12 +151,14 @@ def resonances(result: Any) -> list[dict[str, Any]]:
                 {
                     "body": str(body),
                     "node": node,
-                    "speed_rpm": p.speed * RPM,
+                    "speed_rpm": significant(p.speed * RPM),
                     "amplitude_m": p.amplitude,
                     "amplification_factor": p.amplification_factor,
                     "half_power_rpm": None
                     if p.lower is None or p.upper is None
-                    else [p.lower * RPM, p.upper * RPM],
+                    else [significant(p.lower * RPM), significant(p.upper * RPM)],
+                    "samples_in_band": p.samples,
+                    "resolved": p.resolved,
                 }
             )
     return out
