@@ -4,6 +4,8 @@ the set is written in, and bad sets are refused naming the field."""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from planetary_cases import build, model_case
@@ -198,3 +200,20 @@ def test_wind_turbine_example_at_rated_speed():
     d = [transmission_error_array(p.solution, a, f"stage1.sun{k}")[1][at] for k in range(3)]
     assert abs(d[0]) > 1e-7
     assert d[1] == pytest.approx(d[0], rel=1e-6) and d[2] == pytest.approx(d[0], rel=1e-6)
+
+
+def test_planet_orbit_plot_spans_one_carrier_revolution():
+    """The orbit plot of a planet spans its orbit, one turn of the carrier (20 rad/s here),
+    not the base period of the whole train."""
+    from rheolin.plots.point import orbits_figure
+    from rheolin.results import point_dataset, solve_point
+
+    m, speed = model_case(carrier_speed=20.0, te=1e-6)
+    ds = point_dataset(solve_point(m, speed, stability=False))
+    orbits = json.loads(ds.attrs["orbits_json"])
+    assert orbits == pytest.approx({f"set.planet{n}": 20.0 / (2 * np.pi) for n in range(4)})
+    ax = orbits_figure(ds, ["set.planet1:0"]).axes[0]
+    assert "one orbit of set.planet1" in ax.get_title()
+    line = ax.get_lines()[0]  # the orbit: a closed curve over exactly one carrier turn
+    xy = np.column_stack(line.get_data())
+    assert np.abs(xy[-1] - xy[0]).max() < 1e-9 * np.abs(xy).max()

@@ -33,6 +33,7 @@ __all__ = [
     "floquet_attrs",
     "frequency_markers",
     "netcdf_engine",
+    "orbit_frequencies",
     "point_dataset",
     "stability_text",
     "write_dataset",
@@ -189,6 +190,8 @@ def point_dataset(
     coords["iteration"] = ("iteration", np.arange(1, hist.size + 1))
     ds = xr.Dataset(data, coords=coords)
     ds.attrs["markers_json"] = json.dumps(frequency_markers(a))
+    if a.frames is not None and a.frames.planets():
+        ds.attrs["orbits_json"] = json.dumps(orbit_frequencies(a))
     ds.attrs.update(
         {
             "title": f"rheolin steady state{': ' + model_name if model_name else ''}",
@@ -251,6 +254,18 @@ def frequency_markers(a: Assembled) -> dict[str, float]:
     for name, (_, _, n) in a.meshes.items():
         label = name.split(".")[0] if name.split(".")[0] in a.plan.sets else name  # one per set
         out[f"{label} mesh"] = abs(n) * a.omega / (2 * math.pi)
+    return out
+
+
+def orbit_frequencies(a: Assembled) -> dict[str, float]:
+    """Each planet's orbit frequency [Hz], its carrier's speed (for the orbit plots)."""
+    if a.frames is None:
+        return {}
+    out = {}
+    for name, (_, spin, _) in a.frames.sets.items():
+        for planet in a.frames.planets():
+            if planet.startswith(f"{name}.planet"):
+                out[planet] = abs(spin) * a.omega / (2 * math.pi)
     return out
 
 
