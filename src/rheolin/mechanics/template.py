@@ -29,8 +29,14 @@ from .gears import gear_mesh_term, line_of_action
 from .items import ModelData
 from .joints import COMPONENTS, coupling_speed_term, lever, pair_block
 from .loads import gravity_load, harmonic_force_term
+from .planetary_assembly import (
+    harmonic_generators,
+    model_frames,
+    set_meshes_for_output,
+    set_terms,
+)
 from .shaft import element_matrices
-from .speeds import SpeedPlan, propagate_speeds, speed_plan
+from .speeds import SpeedPlan, speed_plan, train_speeds
 
 __all__ = ["SpeedTemplate", "assemble_model", "model_speed_plan"]
 
@@ -143,6 +149,8 @@ class SpeedTemplate:
                 self.dof_labels += [(b.name, -1 - j, "mode") for j in range(modes)]
                 self.n_dof += modes
         dof = {key: 6 * v + np.arange(6) for key, v in self.node_index.items()}
+        self.frames = model_frames(model, plan, dof)
+        self.generators = harmonic_generators(model, plan)
         self.constraint = _links(model, dof, self.n_dof)
         self.whirl_pairs = _planes(model, dof)
         self.frames = _frames(model, dof, plan)
@@ -175,7 +183,7 @@ class SpeedTemplate:
                 z = {0: {0: np.zeros((jt.dofs.size, jt.dofs.size))}}
                 self.joints[name] = SpeedTerm(jt.dofs, M=z, D=z, K=z)
                 self.tables[name] = (table, ratio, np.asarray(jt.dofs), levers)
-        self.meshes: dict[str, tuple[Term, np.ndarray, int]] = {}
+        self.meshes: dict[str, tuple[Term, Any, int]] = {}
         for (name, g), harmonic in zip(model.meshes.items(), plan.mesh, strict=True):
             w = _mesh_vector(model, g, plan)
             dof_a = dof[(g["pair"].pinion_body, g["pinion_node"])]
@@ -192,11 +200,23 @@ class SpeedTemplate:
             terms.append(SpeedTerm.constant(term))
         terms += list(self.joints.values())
         terms += [SpeedTerm.constant(m[0]) for m in self.meshes.values()]
-        self._collect(terms)
+        sets, set_meshes = set_terms(model, plan, dof, self.frames)
+        if self.frames:  # planetary sets: the frames' DOFs written in their carriers' axes
+            terms = [self.frames.turn(t) for t in terms]
+            self.joints = {n: self.frames.outputs(t) for n, t in self.joints.items()}
+            self.meshes = {
+                n: (t, self.frames.vector(w, t.dofs), h) for n, (t, w, h) in self.meshes.items()
+            }
+        self._collect(terms + sets)
+        self.meshes.update(set_meshes_for_output(set_meshes))
         if model.gravity is not None:
             M = self._M.at(1.0)  # the mass matrix does not depend on the speed
             M.update({-k: x.conj() for k, x in M.items() if k})
-            for k, v in gravity_load(M, model.gravity, len(self.node_index)).items():
+            if self.frames:
+                loads = self.frames.gravity(M, model.gravity, self.n_dof, len(self.node_index))
+            else:
+                loads = gravity_load(M, model.gravity, len(self.node_index))
+            for k, v in loads.items():
                 if k >= 0:
                     self._loads.setdefault(k, np.zeros((_POWERS, self.n_dof), complex))[0] += v
 
@@ -339,11 +359,12 @@ class SpeedTemplate:
             self.plan.base,
             speed,
             self.plan,
-            self.plan.generators,
+            self.generators,
             self.dof_labels,
             self.node_index,
             joints,
             self.meshes,
+            self.frames if self.frames else None,
         )
 
 
@@ -356,9 +377,11 @@ def model_speed_plan(model: ModelData) -> SpeedPlan:
         raise ModelError(f"`input_body`: no body named {inp!r}; bodies: {list(model.bodies)}")
     fixed = {n: b.speed_ratio for n, b in model.bodies.items() if b.speed_ratio is not None}
     pairs = [m["pair"] for m in model.meshes.values()]
-    ratios = propagate_speeds(inp, pairs, model.bodies, fixed)
+    carried = [c for s in model.planetary.values() for c in s.constraints()]
+    ratios = train_speeds(inp, pairs, model.bodies, fixed, carried)
     loads = [f["order"] * abs(ratios[f["reference"]]) for f in model.forces.values()]
-    return speed_plan(inp, pairs, model.bodies, loads, fixed)
+    sets = {n: (s.sun[0], s.carrier[0], s.geometry.sun_teeth) for n, s in model.planetary.items()}
+    return speed_plan(inp, pairs, model.bodies, loads, fixed, carried, sets)
 
 
 def _planes(
