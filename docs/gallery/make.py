@@ -100,7 +100,7 @@ FIGURES: list[tuple[str, str, str, Callable[[], Any]]] = [
             f"rheolin draw {n}.toml --nodes",
             functools.partial(lambda n: model_figure(model(n), nodes=True, title=n), n),
         )
-        for n in ("gearbox", "rotor", "preloaded")
+        for n in ("gearbox", "rotor", "preloaded", "wind-turbine")
     ],
     (
         "run_orbits",

@@ -35,6 +35,7 @@ __all__ = [
     "preflight",
     "show_operating_point",
     "solve_options",
+    "stability_fits",
     "stability_flag",
 ]
 
@@ -150,12 +151,42 @@ def output_dir(out: Path | None, default: str) -> Path:
 
 
 def preflight(
-    lm: Any, speeds: Any, order: int | None, max_order: float | None, needs_load: bool = True
+    lm: Any,
+    speeds: Any,
+    order: int | None,
+    max_order: float | None,
+    needs_load: bool = True,
+    stability: bool | None = None,
 ) -> Any:
-    """Physical admissibility and sizes against the memory budget, before any work."""
+    """Physical admissibility and sizes against the memory budget, before any work; with
+    ``stability=True`` (``--stability on``) the Floquet check's estimate too."""
     from ..io.preflight import preflight as check
 
-    return check(lm, speeds, order=order, max_order=max_order, needs_load=needs_load)
+    info = check(lm, speeds, order=order, max_order=max_order, needs_load=needs_load)
+    if stability:
+        stability_fits(lm, speeds)
+    return info
+
+
+def stability_fits(lm: Any, speeds: Any) -> None:
+    """Refuse (exit 2) a Floquet check that cannot fit the memory budget, with its estimate
+    and what to change; nothing large is built (the model is assembled at one speed)."""
+    from ..budget import format_bytes, memory_budget
+    from ..floquet import floquet_memory
+
+    listed = [float(x) for x in np.atleast_1d(speeds if speeds is not None else [])]
+    speed = max(listed) if listed else 100.0
+    system = lm.model.assemble(speed).system
+    kind, estimate = floquet_memory(system)
+    limit = memory_budget()
+    if estimate > limit:
+        raise fail(
+            f"--stability on: the {kind} Floquet check of {system.n} DOF needs an estimated "
+            f"{format_bytes(estimate)}, more than the memory budget of {format_bytes(limit)}; "
+            "condense bodies (rheolin condense), mesh the shafts more coarsely, use "
+            "--stability auto (it reports the check as not done), or raise the budget "
+            "(RHEOLIN_MEMORY_BUDGET)"
+        )
 
 
 def show_operating_point(model: Any, speed: float, where: str) -> None:

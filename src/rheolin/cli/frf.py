@@ -106,8 +106,11 @@ def frf(
                     f"than the memory budget of {format_bytes(memory_budget())}"
                 )
             else:
-                with working("Floquet stability"):
-                    verdict = floquet(assembled.system)
+                try:
+                    with working("Floquet stability"):
+                        verdict = floquet(assembled.system)
+                except (ArithmeticError, ValueError, RuntimeError) as exc:
+                    why = f"the Floquet check failed numerically: {exc}"  # the FRF stands
         else:
             why = "--stability off"
     with sigterm_as_interrupt(), staged_output(out_dir, FRF_FILES) as stage:

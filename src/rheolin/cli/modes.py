@@ -35,7 +35,13 @@ def modes(
     from ..results.dataset import write_dataset
     from ..results.units import speed_attrs
     from ..stability.campbell import STANDSTILL
-    from ..stability.modes import averaged_modes, mode_energy, mode_kind, whirl_ratio
+    from ..stability.modes import (
+        averaged_modes,
+        mode_energy,
+        mode_kind,
+        planetary_kinds,
+        whirl_ratio,
+    )
 
     lm = load(model)
     (w,) = parse_speeds(speed, "--speed", allow_zero=True)[:1]
@@ -51,7 +57,7 @@ def modes(
         axes = {b: m.bodies[b].axis for b in m.bodies}
         ratio = whirl_ratio(am.shapes, a.dof_labels, axes, a.plan.spin)
         energy = mode_energy(am.shapes, a.dof_labels, axes, a.system.M[0])
-        kinds = mode_kind(energy, ratio)
+        kinds = planetary_kinds(mode_kind(energy, ratio), am.shapes, m, a)
     labels = [f"{b}:{n}:{c}" for b, n, c in a.dof_labels]
     ds = xr.Dataset(
         {

@@ -78,7 +78,7 @@ def run(
         if bad:
             raise fail(f"--nodes: unknown {bad}; nodes look like {sorted(known)[0]!r}")
     out_dir = output_dir(out, f"{model.stem}_results")
-    preflight(lm, [w], opts["order"], opts["max_order"])
+    preflight(lm, [w], opts["order"], opts["max_order"], stability=opts["stability"])
     set_kept(f"nothing written; {out_dir} is unchanged")
     t0 = time.perf_counter()
     rpm = w * 30 / math.pi

@@ -1,7 +1,7 @@
 """Built-in example model files (TOML), shipped as package data.
 
 >>> sorted(EXAMPLES)
-['gearbox', 'preloaded', 'rotor']
+['gearbox', 'preloaded', 'rotor', 'wind-turbine']
 >>> example_text("rotor").startswith("#")
 True
 """
@@ -19,6 +19,8 @@ EXAMPLES = {
     "rotor": "small asymmetric Jeffcott-type rotor on anisotropic bearings (fast, Floquet-checked)",
     "preloaded": "spur gear pair under torque: Hertzian ball/roller bearings, ISO 6336 mesh "
     "stiffness, solved about its static equilibrium",
+    "wind-turbine": "750 kW wind-turbine drive train (NREL GRC gearing): rotor, main shaft, a "
+    "three-planet stage, two helical stages, generator",
 }
 
 

@@ -17,6 +17,8 @@ from ..harmonics.lattice import Lattice, harmonic_lattice, system_lattice
 from ..harmonics.sets import HarmonicSet, as_harmonic_set
 from ..system.periodic import PeriodicSystem
 from ..system.rigid_modes import held_rigid_modes as find_rigid_modes
+from . import large
+from .band import BandAveraged, band_memory
 from .confirm import confirm_unresolved
 from .continuation import Continuation
 from .dense import floquet_dense
@@ -96,6 +98,7 @@ def floquet(
     memory_budget: str | int | float | None = None,
     near: Any = None,
     continuation: Continuation | None = None,
+    band: int | None = None,
 ) -> FloquetResult:
     """Floquet exponents by Hill's method.
 
@@ -150,6 +153,10 @@ def floquet(
         Lattice method over a sweep: a :class:`~rheolin.floquet.Continuation` shared by the
         calls at successive speeds; each lattice search starts from the previous call's
         eigenvectors (fewer Arnoldi steps; the same checks and verdict).
+    band
+        Lattice method: search from this many time-averaged modes nearest 0, computed
+        sparsely, with certificates for the modes left out (docs/stability.md, section 8).
+        ``None``: every mode densely up to ``2 n = 4000``, a band above (``info["band"]``).
 
     Examples
     --------
@@ -171,14 +178,26 @@ def floquet(
     if not isinstance(method, str) or method not in allowed:
         raise ValueError(f"`method` must be one of {list(allowed)}, got {method!r:.80}")
     _check_counts(system, harmonics, k=k, order=order, max_shifts=max_shifts)
+    if band is not None and (isinstance(band, bool) or int(band) < 2):
+        raise ValueError(f"`band` must be an integer >= 2 (modes), got {band!r}")
+    rotated: list[str] = []
+    if (
+        method in ("auto", "lattice")
+        and (harmonics is None or isinstance(harmonics, Lattice))
+        and large.uses_band(system, band)
+    ):
+        # a large model: non-axisymmetric unmeshed shafts in their own frames (exact)
+        system, rotated = large.in_body_frames(system)
     if system.constraint is not None:  # rigid links: the exponents of the constrained system
         system = system.constraint.reduce(system)
     rigid = find_rigid_modes(system)
     held = system if rigid is None else rigid.reduce(system)
     res = _floquet(
         held, harmonics, method, order, frequencies, k, max_shifts, memory_budget, near,
-        continuation=continuation,
+        continuation=continuation, band=band,
     )  # fmt: skip
+    if rotated and "band" in res.info:
+        res.info["band"]["frames"] = rotated
     if rigid is not None:  # their zero exponents are a Jordan block: held, not analysed
         note = rigid.note(system)
         res.info["note"] = f"{note}; {res.info['note']}" if res.info.get("note") else note
@@ -198,16 +217,29 @@ def _floquet(
     near: Any,
     *,
     continuation: Continuation | None = None,
+    band: int | None = None,
 ) -> FloquetResult:
     """:func:`floquet` on a system without rigid-body modes (checked by the caller)."""
     budget = memory_budget
+    banded = large.uses_band(system, band) and not system.time_invariant
     if isinstance(harmonics, Lattice):
         if method not in ("auto", "lattice"):
             raise ValueError(
                 f"a Lattice truncation needs method='lattice' (or 'auto'), got {method!r}"
             )
+        modes = large.certified_band(system, band, budget, harmonics.order) if banded else None
         return _floquet_lattice(
-            system, harmonics, budget=budget, near=near, continuation=continuation
+            system, harmonics, budget=budget, near=near, continuation=continuation, modes=modes
+        )
+    if banded and method in ("auto", "lattice") and harmonics is None:
+        return _lattice_auto(
+            system,
+            order,
+            budget,
+            refine=order is None and near is None,
+            near=near,
+            continuation=continuation,
+            band=band,
         )
     if near is not None and method != "lattice":
         raise ValueError("`near` needs method='lattice'")
@@ -327,6 +359,8 @@ def floquet_memory(system: PeriodicSystem, order: int | None = None) -> tuple[st
     if size <= AUTO_DENSE_LIMIT:
         return "dense", size * size * 16 * 7
     p = DEFAULT_LATTICE_ORDER if order is None else int(order)
+    if large.uses_band(system, None):
+        return "band", large.band_estimate(system, p)
     return "lattice", lattice_memory(system, system_lattice(system, p, max_size=10**6))
 
 
@@ -338,14 +372,19 @@ def _lattice_auto(
     refine: bool,
     near: Any = None,
     continuation: Continuation | None = None,
+    band: int | None = None,
 ) -> FloquetResult:
     """Lattice method at ``order`` (default: the coarsest, raised one order at a time up to
     :data:`MAX_AUTO_ORDER` while undecided and the larger lattice fits the budget; where it
-    does not, the undecided coarse verdict says so)."""
+    does not, the undecided coarse verdict says so). A large model (or ``band``) starts from
+    the band of time-averaged modes, built once for every order."""
     limit = resolve_budget(budget)
     p = DEFAULT_LATTICE_ORDER if order is None else int(order)
+    modes = large.certified_band(system, band, budget, p) if large.uses_band(system, band) else None
     lat = system_lattice(system, p, max_size=10**6)
-    res = _floquet_lattice(system, lat, budget=budget, near=near, continuation=continuation)
+    res = _floquet_lattice(
+        system, lat, budget=budget, near=near, continuation=continuation, modes=modes
+    )
     tried: list[int] = []
     seconds = float(res.info["seconds"])
     while refine and not res.decided and p < max(MAX_AUTO_ORDER, DEFAULT_LATTICE_ORDER):
@@ -357,7 +396,7 @@ def _lattice_auto(
         log.info("floquet: order %d undecided; refining to order %d", p, p + 1)
         tried.append(p)
         p += 1
-        res = _floquet_lattice(system, finer, budget=budget, continuation=continuation)
+        res = _floquet_lattice(system, finer, budget=budget, continuation=continuation, modes=modes)
         seconds += float(res.info["seconds"])
         res.info["refined_from"] = list(tried)
         res.info["seconds"] = seconds
@@ -371,9 +410,12 @@ def _floquet_lattice(
     budget: Any,
     near: Any = None,
     continuation: Continuation | None = None,
+    modes: Any = None,
 ) -> FloquetResult:
     t0 = time.perf_counter()
     est = lattice_memory(system, lattice)
+    if isinstance(modes, BandAveraged):
+        est += band_memory(system, int(modes.lam.size))
     _check_budget(
         est,
         budget,
@@ -386,7 +428,13 @@ def _floquet_lattice(
         # the truncation estimates are made last, for the exponents the confirmations keep
         # (those they replace by finer ones need none)
         out = lattice_exponents(
-            system, lattice, near=near, start=start, same_system=False, defer_truncation=True
+            system,
+            lattice,
+            near=near,
+            start=start,
+            same_system=False,
+            defer_truncation=True,
+            modes=modes,
         )
         if continuation is not None and near is None:
             continuation.keep(system.n, lattice, out)
@@ -421,6 +469,7 @@ def _floquet_lattice(
             out.settle(out, np.flatnonzero(np.isnan(out.truncation)))
             out.settle = None  # it holds the lattice's operators
     w = system.omega
+    out.exponents = large.inertial_exponents(system, modes, out.exponents, out.dominant)
     res = floquet_result(out.exponents, out.bounds, out.edge, w, "lattice", info=out.info)
     order = np.argsort(-out.exponents.real, kind="stable")
     res.truncation = out.truncation[order]
@@ -443,6 +492,8 @@ def _floquet_lattice(
     if "confirmed" in out.info:
         res.info["confirmed"] = out.info["confirmed"]
     res.info["liouville"] = out.liouville
+    if isinstance(modes, BandAveraged):
+        res.info["band"] = large.band_info(modes, [])
     return res
 
 

@@ -45,7 +45,9 @@ class Outer:
         if den == 0:
             return float("inf")
         s_o = lam + 1j * w * self.O.astype(float)
-        if self.avg.modal:
+        partial = getattr(self.avg, "partial", False)
+        rest = 0.0
+        if self.avg.modal or partial:
             ac, rr = a[:, self.cols], r[:, self.rows]
             # only the outer harmonics that both couplings reach: the others are exact
             # zeros, which add nothing (bench/stability.py, design notes)
@@ -54,9 +56,16 @@ class Outer:
             Gr = rr[both] @ self.Wv
             with np.errstate(divide="ignore", invalid="ignore"):
                 term = -np.sum(Ga * Gr / (self.avg.lam[None, :] - s_o[both, None]))
+            if partial:
+                # the modes outside a band: |a^T G_C r| <= ||a|| ||G_C|| ||r|| with the
+                # largest ||G_C|| of its scan (docs/stability.md, 8.2)
+                c = getattr(self.avg, "complement", None)
+                g = c.g_max if c is not None else float("inf")
+                norms = np.linalg.norm(ac[both], axis=1) * np.linalg.norm(rr[both], axis=1)
+                rest = g * float(norms.sum()) if norms.size else 0.0
         else:
             term = self._direct(a, r, s_o)
-        val = abs(term / den)
+        val = (abs(term) + rest) / abs(den)
         return float(val) if np.isfinite(val) else float("inf")
 
     def _direct(self, a: np.ndarray, r: np.ndarray, s_o: np.ndarray) -> complex:

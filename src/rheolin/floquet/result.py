@@ -188,6 +188,10 @@ class FloquetResult:
         if not self.stable:
             sure = (lam.real > tol + reach) & ~self.info.get("unresolved", np.zeros(lam.size, bool))
             return bool(np.any(sure))
+        # a band of a large model: the modes left out must be bounded (docs/stability.md, 8)
+        band = self.info.get("band")
+        if band and not band.get("certified", False):
+            return False
         gap = self.info.get("split_gap", np.full(lam.size, np.inf))
         near_split = gap < 2.0 * reach
         loose = self.truncation > tol

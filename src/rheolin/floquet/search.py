@@ -19,6 +19,7 @@ from ..harmonics.hill_lattice import LatticeHill
 from ..harmonics.lattice import Lattice
 from ..system.periodic import PeriodicSystem
 from .averaged import Averaged
+from .band import BAND_ABOVE, time_averaged
 from .checks import liouville_sum
 from .continuation import (
     TRACK_DRIFT,
@@ -69,6 +70,7 @@ def lattice_exponents(
     same_system: bool = True,
     coarse: LatticeExponents | None = None,
     defer_truncation: bool = False,
+    modes: Averaged | None = None,
 ) -> LatticeExponents:
     """Representatives of the Floquet exponents of ``system`` on ``lattice``.
 
@@ -85,6 +87,8 @@ def lattice_exponents(
     sweep: the previous speed's fine vectors first, this speed's coarse ones otherwise).
     ``defer_truncation``: the truncation estimates are left to the result's ``settle(rows)``
     (a confirmation keeps only some of the finer lattice's exponents; NaN until settled).
+    ``modes``: the time-averaged modes to start from (a band of a large model,
+    :func:`~rheolin.floquet.band.band_modes`); default all of them, or ``start``'s.
     """
     search = LatticeSearch(
         system,
@@ -94,6 +98,7 @@ def lattice_exponents(
         same_system=same_system,
         coarse=coarse,
         defer_truncation=defer_truncation,
+        modes=modes,
     )
     return search.run()
 
@@ -134,6 +139,7 @@ class LatticeSearch:
         same_system: bool = True,
         coarse: LatticeExponents | None = None,
         defer_truncation: bool = False,
+        modes: Averaged | None = None,
     ) -> None:
         self.t0 = time.perf_counter()
         self.system, self.lattice = system, lattice
@@ -146,7 +152,9 @@ class LatticeSearch:
         self.same_system, self.defer_truncation = same_system, defer_truncation
         # of this system: its averaged modes and Liouville sum hold here too
         same = self.same = start if same_system else coarse
-        self.avg = same.modes if same is not None and same.modes is not None else Averaged(system)
+        if modes is None and same is not None:
+            modes = same.modes
+        self.avg = modes if modes is not None else time_averaged(system)
         self.hill = LatticeHill(system, self.H)
         self.pencil = BalancedPencil(self.hill, self.avg.sq, self.avg.sv)
         self.centre = lattice.position(0)
@@ -440,6 +448,14 @@ class LatticeSearch:
             ),
         }
 
+    def liouville(self) -> tuple[float, float]:
+        """Liouville's sum of the real parts and its uncertainty; none for a band (it sums
+        every exponent, and the band's are not all of them)."""
+        if getattr(self.avg, "partial", False):
+            return float("nan"), float("inf")
+        same = self.same
+        return same.liouville if same is not None else liouville_sum(self.system)
+
     def run(self) -> LatticeExponents:
         """Every cluster tracked or searched, the certified ones that may lead searched too,
         one representative per exponent selected and turned into the result."""
@@ -449,7 +465,6 @@ class LatticeSearch:
         self.search_certified()
         expected = int(sum(self.quotas.values()))
         reps = select(self.pool, self.quotas, self.w, self.nh, share=self.share)
-        same = self.same
         out = lattice_result(
             self.pencil,
             self.system,
@@ -460,7 +475,7 @@ class LatticeSearch:
             self.family_of,
             self.discs,
             expected=expected,
-            liouville=same.liouville if same is not None else liouville_sum(self.system),
+            liouville=self.liouville(),
             info=self.info(),
             defer_truncation=self.defer_truncation,
         )
@@ -473,7 +488,8 @@ def lattice_memory(system: PeriodicSystem, lattice: Lattice, k: int = 8) -> int:
 
     Counted without building anything: the entries of the lattice operator (from the block
     patterns and the number of harmonic pairs each coefficient harmonic couples), its LU at
-    :data:`LU_FILL` times those entries, the Arnoldi basis, and the dense averaged modes.
+    :data:`LU_FILL` times those entries, the Arnoldi basis, and the dense averaged modes (a
+    large model's band: :func:`~rheolin.floquet.band.band_memory`, counted by the caller).
     """
     H = lattice.indices
     n = system.n
@@ -486,6 +502,5 @@ def lattice_memory(system: PeriodicSystem, lattice: Lattice, k: int = 8) -> int:
         nnz += pairs * int(block.entries()[0].size)
     size2 = 2 * n * H.size
     ncv = max(2 * k + 1, ARNOLDI_STEPS[-1] + 1)  # the Arnoldi basis (no restarts)
-    return int(
-        nnz * 16 * (6 + LU_FILL) + size2 * 16 * (ncv + 8) + (2 * n) ** 2 * 16 * 6 + 64 * 2**20
-    )
+    averaged = (2 * n) ** 2 * 16 * 6 if 2 * n <= BAND_ABOVE else 0
+    return int(nnz * 16 * (6 + LU_FILL) + size2 * 16 * (ncv + 8) + averaged + 64 * 2**20)

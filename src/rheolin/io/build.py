@@ -19,6 +19,7 @@ from ..errors import ModelError
 from ..mechanics.joints import COMPONENTS
 from ..mechanics.model import Model
 from ..mechanics.sections import MATERIALS, general_section
+from .planetary import planetary_arguments
 from .schema import Bearing, CondensedBody, ModelFile, Shaft, material_constant
 from .units import UnitError, to_si
 
@@ -172,6 +173,10 @@ class _Builder:
                            stiffness=r.stiffness or 0.0, **kw)  # fmt: skip
         for i, m in enumerate(spec.meshes):
             self._mesh(m, f"meshes[{i}]")
+        for i, ps in enumerate(spec.planetary):
+            p = f"planetary[{i}]"
+            self._call(p, self.model.add_planetary, **planetary_arguments(ps, p))
+            self.nodes.update(dict.fromkeys(self.model.planetary[ps.name].planets, 1))
         for path, b in bodies:  # after the meshes: the sense each shaft turns is known
             for i, j in enumerate(b.bearings):
                 if j.journal is not None:
@@ -204,7 +209,8 @@ class _Builder:
             self._call("rigid_links", self.model.speed_template)
         if spec.model.gravity is not None:
             self._call("model.gravity", self.model.set_gravity, spec.model.gravity)
-        self._call("meshes", self.model.speed_plan)  # kinematic consistency of the gear train
+        where = "planetary" if spec.planetary else "meshes"
+        self._call(where, self.model.speed_plan)  # kinematic consistency of the gear train
         return self.model
 
     @staticmethod

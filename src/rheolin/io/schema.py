@@ -16,6 +16,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from ..mechanics.sections import MATERIALS
+from .planetary import Planetary
 from .quantities import (
     Angle,
     AreaPos,
@@ -455,6 +456,7 @@ class ModelFile(_Strict):
     forces: list[Force] = []
     torques: list[Torque] = []
     rigid_links: list[RigidLink] = []
+    planetary: list[Planetary] = []
 
 
 def table_class(annotation: Any) -> Any:

@@ -19,6 +19,7 @@ import tomli_w
 from ..errors import ModelError
 from ..mechanics.sections import Section
 from .atomic import atomic_write
+from .planetary import planetary_table
 
 __all__ = ["model_to_toml"]
 
@@ -91,7 +92,7 @@ def model_to_toml(model: Any, path: str | Path | None = None) -> str:
     tables: dict[str, dict[str, Any]] = {}
     lists: dict[str, list[dict[str, Any]]] = {
         "shafts": [], "rigid_bodies": [], "condensed_bodies": [], "meshes": [], "forces": [],
-        "torques": [], "rigid_links": [],
+        "torques": [], "rigid_links": [], "planetary": [],
     }  # fmt: skip
     for method, call in model.calls:
         if method == "add_shaft":
@@ -143,6 +144,8 @@ def model_to_toml(model: Any, path: str | Path | None = None) -> str:
             lists["torques"].append(_args(call))
         elif method == "add_rigid_link":
             lists["rigid_links"].append(_args(call))
+        elif method == "add_planetary":
+            lists["planetary"].append(planetary_table(call))
         elif method == "set_gravity":
             doc["model"]["gravity"] = _plain(np.asarray(call.get("gravity", (0.0, -9.81, 0.0))))
     for key, items in lists.items():

@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 from fractions import Fraction
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -127,7 +128,12 @@ class Assembled:
     joints
         ``{name: Term}`` of bearings and couplings.
     meshes
-        ``{name: (Term, w, mesh harmonic)}`` of gear meshes (``delta = w^T q``).
+        ``{name: (Term, w, mesh harmonic)}`` of gear meshes (``delta = w^T q``; ``w`` a
+        series ``{k: w_k}`` where it turns: planetary meshes, meshes on a body in a carrier's
+        frame).
+    frames
+        The planetary sets' carrier frames
+        (:class:`~rheolin.mechanics.planetary_assembly.Frames`), or None.
     """
 
     system: PeriodicSystem
@@ -139,7 +145,8 @@ class Assembled:
     dof_labels: list[tuple[str, int, str]]
     node_index: dict[tuple[str, int], int]
     joints: dict[str, Term]
-    meshes: dict[str, tuple[Term, np.ndarray, int]]
+    meshes: dict[str, tuple[Term, Any, int]]
+    frames: Any = None
 
     def dofs(self, body: str, node: int) -> np.ndarray:
         """The six global DOFs of a node."""

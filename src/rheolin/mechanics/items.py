@@ -90,7 +90,7 @@ class Body:
     """A body of the model: its nodes along its spin axis, and what each kind needs."""
 
     name: str
-    kind: str  # "shaft" | "rigid" | "condensed"
+    kind: str  # "shaft" | "rigid" | "condensed" | "planet" (a planetary set's, carrier frame)
     axis: np.ndarray
     positions: np.ndarray  # (n_nodes, 3)
     speed_ratio: Fraction | None
@@ -130,6 +130,8 @@ class ModelData(ABC):
         #: load-dependent joints and applied torques (operating point: mechanics.preload)
         self.rolling: dict[str, dict[str, Any]] = {}
         self.torques: dict[str, dict[str, Any]] = {}
+        #: planetary sets (:class:`~rheolin.mechanics.planetary_model.PlanetarySet`)
+        self.planetary: dict[str, Any] = {}
         self.gravity: np.ndarray | None = None
         #: ``(method, arguments)`` of every ``add_*``/``set_gravity`` call, in order.
         self.calls: list[tuple[str, dict[str, Any]]] = []

@@ -32,9 +32,11 @@ from ..errors import ModelError
 from .assembly import Assembled
 from .condensed import condensed_body
 from .gears import mesh_record
-from .items import Body, ModelData, positive, recorded
+from .items import Body, positive, recorded
 from .joints import bearing_record, link_components
 from .loads import gravity_vector, moment_at_node, torque_value
+from .planetary_assembly import refuse_in_frames
+from .planetary_model import PlanetaryTable
 from .preload import OperatingPoint, preloaded_template
 from .preload import operating_point as solve_operating_point
 from .rigid import disk_node, given_node
@@ -48,7 +50,7 @@ from .template import SpeedTemplate, assemble_model, model_speed_plan
 __all__ = ["Assembled", "Model"]
 
 
-class Model(ModelData):
+class Model(PlanetaryTable):
     """A transmission: bodies (shafts, rigid bodies), disks, joints, gear meshes and loads.
 
     Parameters
@@ -439,6 +441,7 @@ class Model(ModelData):
         if key not in self._operating:
             if len(self._operating) > 64:
                 self._operating.clear()
+            refuse_in_frames(self)
             self._operating[key] = solve_operating_point(self, key[0])
         return self._operating[key]
 

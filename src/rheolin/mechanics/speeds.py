@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 
 from ..errors import ModelError
+from .willis import SpeedConstraint, fixed_pair, solve_speeds
 
 __all__ = [
     "GearPair",
@@ -22,6 +23,7 @@ __all__ = [
     "propagate_speeds",
     "rational_gcd",
     "speed_plan",
+    "train_speeds",
 ]
 
 Rational = Fraction | int
@@ -165,6 +167,8 @@ class SpeedPlan:
         Integer mesh harmonic per gear pair (``z_pinion * |s_pinion|``), in ``pairs`` order.
     loads
         Integer harmonic of each extra load frequency, in the order given.
+    sets
+        Integer mesh harmonic per planetary set (``z_sun * |s_sun - s_carrier|``).
     """
 
     base: Fraction
@@ -172,12 +176,13 @@ class SpeedPlan:
     spin: dict[str, int]
     mesh: tuple[int, ...] = ()
     loads: tuple[int, ...] = field(default=())
+    sets: dict[str, int] = field(default_factory=dict)
 
     @property
     def generators(self) -> list[int]:
         """Sorted positive generator harmonics: body spins, meshes and load frequencies."""
         g = {abs(s) for s in self.spin.values()} | {abs(m) for m in self.mesh}
-        g |= {abs(n) for n in self.loads}
+        g |= {abs(n) for n in self.loads} | {abs(m) for m in self.sets.values()}
         return sorted(x for x in g if x != 0)
 
     def harmonic(self, ratio: Rational) -> int:
@@ -195,12 +200,39 @@ class SpeedPlan:
         return int(n)
 
 
+def train_speeds(
+    input_body: str,
+    pairs: Sequence[GearPair],
+    bodies: Iterable[str] = (),
+    fixed_ratios: Mapping[str, Rational] | None = None,
+    carried: Sequence[SpeedConstraint] = (),
+) -> dict[str, Fraction]:
+    """:func:`propagate_speeds`, or with planetary sets (``carried``: the Willis constraints
+    of their meshes, :mod:`rheolin.mechanics.willis`) the exact solution of every constraint.
+
+    >>> from rheolin.mechanics.willis import set_constraints
+    >>> cs = set_constraints("set", "sun", "ring", "c", ["p"], (21, 39, 99))
+    >>> train_speeds("c", [GearPair("sun", "out", 30, 60)], [], {"ring": 0}, cs)["out"]
+    Fraction(-20, 7)
+    """
+    if not carried:
+        return propagate_speeds(input_body, pairs, bodies, fixed_ratios)
+    fixed = [
+        fixed_pair(p.pinion_body, p.gear_body, p.pinion_teeth, p.gear_teeth, p.internal,
+                   f"the gear mesh {p.pinion_body!r}-{p.gear_body!r}")
+        for p in pairs
+    ]  # fmt: skip
+    return solve_speeds(input_body, [*fixed, *carried], bodies, fixed_ratios)
+
+
 def speed_plan(
     input_body: str,
     pairs: Sequence[GearPair],
     bodies: Iterable[str] = (),
     load_ratios: Iterable[Rational] = (),
     fixed_ratios: Mapping[str, Rational] | None = None,
+    carried: Sequence[SpeedConstraint] = (),
+    sets: Mapping[str, tuple[str, str, int]] | None = None,
 ) -> SpeedPlan:
     """Speeds, base frequency and integer harmonics of a geared model.
 
@@ -211,6 +243,10 @@ def speed_plan(
     load_ratios
         Load frequencies relative to the input speed (e.g. ``2 * ratio`` of a body for a
         twice-per-revolution force); they take part in the gcd.
+    carried, sets
+        Planetary sets: their Willis constraints (:func:`train_speeds`), and per set its sun
+        body, carrier body and sun tooth count (the mesh frequency
+        ``z_s |W_sun - W_carrier|``).
 
     Examples
     --------
@@ -218,10 +254,11 @@ def speed_plan(
     >>> p.base, p.spin["in"], p.spin["mid"], p.spin["out"], p.mesh
     (Fraction(1, 2867), 2867, -1081, 437, (65941, 20539))
     """
-    ratios = propagate_speeds(input_body, pairs, bodies, fixed_ratios)
+    ratios = train_speeds(input_body, pairs, bodies, fixed_ratios, carried)
     loads = [Fraction(x) for x in load_ratios]
     mesh_ratios = [p.pinion_teeth * abs(ratios[p.pinion_body]) for p in pairs]
-    base = rational_gcd([*ratios.values(), *mesh_ratios, *loads])
+    set_ratios = {n: z * abs(ratios[s] - ratios[c]) for n, (s, c, z) in (sets or {}).items()}
+    base = rational_gcd([*ratios.values(), *mesh_ratios, *loads, *set_ratios.values()])
     spin = {b: int(r / base) for b, r in ratios.items()}
     mesh = tuple(int(m / base) for m in mesh_ratios)
     return SpeedPlan(
@@ -230,4 +267,5 @@ def speed_plan(
         spin=spin,
         mesh=mesh,
         loads=tuple(int(x / base) for x in loads),
+        sets={n: int(m / base) for n, m in set_ratios.items()},
     )

@@ -19,6 +19,7 @@ import scipy.sparse as sp
 
 from ..errors import ModelError
 from ..system.constraints import LinearConstraint
+from ..system.frames import BodyFrame
 from ..system.motions import Motions
 from ..system.periodic import PeriodicSystem
 from ._term import SpeedTerm, Term
@@ -29,8 +30,14 @@ from .gears import gear_mesh_term, line_of_action
 from .items import ModelData
 from .joints import COMPONENTS, coupling_speed_term, lever, pair_block
 from .loads import gravity_load, harmonic_force_term
+from .planetary_assembly import (
+    harmonic_generators,
+    model_frames,
+    set_meshes_for_output,
+    set_terms,
+)
 from .shaft import element_matrices
-from .speeds import SpeedPlan, propagate_speeds, speed_plan
+from .speeds import SpeedPlan, speed_plan, train_speeds
 
 __all__ = ["SpeedTemplate", "assemble_model", "model_speed_plan"]
 
@@ -143,9 +150,13 @@ class SpeedTemplate:
                 self.dof_labels += [(b.name, -1 - j, "mode") for j in range(modes)]
                 self.n_dof += modes
         dof = {key: 6 * v + np.arange(6) for key, v in self.node_index.items()}
+        self.frames = model_frames(model, plan, dof)
+        self.generators = harmonic_generators(model, plan)
         self.constraint = _links(model, dof, self.n_dof)
         self.whirl_pairs = _planes(model, dof)
         self.motions = _motions(model, dof, self.dof_labels)
+        # bodies in a carrier's axes are already in a rotating frame: no body frame on top
+        self.body_frames = () if self.frames else _frames(model, dof, plan)
         terms = self._body_terms(model)
         self.joints: dict[str, SpeedTerm] = {}
         #: speed-dependent joints: name -> (table, |speed ratio| of its body, DOFs)
@@ -175,7 +186,7 @@ class SpeedTemplate:
                 z = {0: {0: np.zeros((jt.dofs.size, jt.dofs.size))}}
                 self.joints[name] = SpeedTerm(jt.dofs, M=z, D=z, K=z)
                 self.tables[name] = (table, ratio, np.asarray(jt.dofs), levers)
-        self.meshes: dict[str, tuple[Term, np.ndarray, int]] = {}
+        self.meshes: dict[str, tuple[Term, Any, int]] = {}
         for (name, g), harmonic in zip(model.meshes.items(), plan.mesh, strict=True):
             w = _mesh_vector(model, g, plan)
             dof_a = dof[(g["pair"].pinion_body, g["pinion_node"])]
@@ -192,11 +203,23 @@ class SpeedTemplate:
             terms.append(SpeedTerm.constant(term))
         terms += list(self.joints.values())
         terms += [SpeedTerm.constant(m[0]) for m in self.meshes.values()]
-        self._collect(terms)
+        sets, set_meshes = set_terms(model, plan, dof, self.frames)
+        if self.frames:  # planetary sets: the frames' DOFs written in their carriers' axes
+            terms = [self.frames.turn(t) for t in terms]
+            self.joints = {n: self.frames.outputs(t) for n, t in self.joints.items()}
+            self.meshes = {
+                n: (t, self.frames.vector(w, t.dofs), h) for n, (t, w, h) in self.meshes.items()
+            }
+        self._collect(terms + sets)
+        self.meshes.update(set_meshes_for_output(set_meshes))
         if model.gravity is not None:
             M = self._M.at(1.0)  # the mass matrix does not depend on the speed
             M.update({-k: x.conj() for k, x in M.items() if k})
-            for k, v in gravity_load(M, model.gravity, len(self.node_index)).items():
+            if self.frames:
+                loads = self.frames.gravity(M, model.gravity, self.n_dof, len(self.node_index))
+            else:
+                loads = gravity_load(M, model.gravity, len(self.node_index))
+            for k, v in loads.items():
                 if k >= 0:
                     self._loads.setdefault(k, np.zeros((_POWERS, self.n_dof), complex))[0] += v
 
@@ -320,6 +343,7 @@ class SpeedTemplate:
         )
         system.whirl_pairs = self.whirl_pairs
         system.motions = self.motions
+        system.keep("body_frames", self.body_frames)
         return system
 
     def assemble(self, speed: float) -> Assembled:
@@ -339,11 +363,12 @@ class SpeedTemplate:
             self.plan.base,
             speed,
             self.plan,
-            self.plan.generators,
+            self.generators,
             self.dof_labels,
             self.node_index,
             joints,
             self.meshes,
+            self.frames if self.frames else None,
         )
 
 
@@ -356,9 +381,11 @@ def model_speed_plan(model: ModelData) -> SpeedPlan:
         raise ModelError(f"`input_body`: no body named {inp!r}; bodies: {list(model.bodies)}")
     fixed = {n: b.speed_ratio for n, b in model.bodies.items() if b.speed_ratio is not None}
     pairs = [m["pair"] for m in model.meshes.values()]
-    ratios = propagate_speeds(inp, pairs, model.bodies, fixed)
+    carried = [c for s in model.planetary.values() for c in s.constraints()]
+    ratios = train_speeds(inp, pairs, model.bodies, fixed, carried)
     loads = [f["order"] * abs(ratios[f["reference"]]) for f in model.forces.values()]
-    return speed_plan(inp, pairs, model.bodies, loads, fixed)
+    sets = {n: (s.sun[0], s.carrier[0], s.geometry.sun_teeth) for n, s in model.planetary.items()}
+    return speed_plan(inp, pairs, model.bodies, loads, fixed, carried, sets)
 
 
 def _planes(
@@ -378,6 +405,25 @@ def _planes(
     if not ix:
         return None
     return np.array(ix, dtype=np.int64), np.array(iy, dtype=np.int64)
+
+
+def _frames(
+    model: ModelData, dof: dict[tuple[str, int], np.ndarray], plan: SpeedPlan
+) -> tuple[BodyFrame, ...]:
+    """The rotating bodies' frames (:class:`rheolin.system.frames.BodyFrame`): spin, axis and
+    node triples, for the stability check of large models (docs/stability.md)."""
+    meshed = {
+        b for m in model.meshes.values() for b in (m["pair"].pinion_body, m["pair"].gear_body)
+    }
+    out = []
+    for b in model.bodies.values():
+        s = plan.spin.get(b.name, 0)
+        if s and len(b.positions):
+            d = np.array([dof[(b.name, i)] for i in range(len(b.positions))])
+            ax = np.asarray(b.axis, float)
+            axis = (float(ax[0]), float(ax[1]), float(ax[2]))
+            out.append(BodyFrame(b.name, int(s), axis, d.reshape(-1, 3), b.name in meshed))
+    return tuple(out)
 
 
 def _motions(

@@ -38,8 +38,11 @@ __all__ = ["draw_model", "model_figure"]
 
 def _end_view(ax: Any, geo: Geometry, bodies: list[str]) -> list:
     """The gear train seen along the axis: shafts, pitch circles, meshes, ratios; returns
-    the labels, the most important first."""
+    the labels, the most important first. Only the bodies with a gear are drawn (a rotor or
+    a generator on the same axis would dwarf the gears)."""
     e, d, d2 = frame(geo, bodies)
+    geared = {b for m in geo.meshes for b in (m.pinion[0], m.gear[0])}
+    bodies = [b for b in bodies if b in geared] or bodies
 
     def xy(p: np.ndarray) -> tuple[float, float]:
         return float(p @ d2) * MM, float(p @ d) * MM
@@ -89,8 +92,8 @@ def _end_view(ax: Any, geo: Geometry, bodies: list[str]) -> list:
             0,
             ax.annotate(
                 b + turn,
-                (x, y),
-                xytext=(0, -r - 4 if r else -6),
+                (x, y - max(r, 1.0)),
+                xytext=(0, -4),
                 textcoords="offset points",
                 ha="center",
                 va="top",

@@ -281,6 +281,7 @@ def model_geometry(model: Any) -> Geometry:
                 bool(getattr(pair, "internal", False)),
             )
         )
+    _planetary_meshes(model, geo, gears)
     calls = _disk_calls(model)
     for name, body in model.bodies.items():
         e = geo.axes[name]
@@ -335,6 +336,50 @@ def model_geometry(model: Any) -> Geometry:
     for name, t in model.torques.items():
         geo.torques[name] = (t["body"], int(t["node"]), t["torque"])
     return geo
+
+
+def _planetary_meshes(
+    model: Any, geo: Geometry, gears: dict[tuple[str, int], tuple[str, int, float]]
+) -> None:
+    """Each planetary set's sun, ring and planets as gears, with every planet's sun mesh and
+    (internal) ring mesh; the planets at their places at ``t = 0``."""
+    for name, ps in getattr(model, "planetary", {}).items():
+        g = ps.geometry
+        mt = float(g.transverse_module)
+        pitch = {"sun": g.sun_teeth * mt, "planet": g.planet_teeth * mt, "ring": g.ring_teeth * mt}
+        gears.setdefault(ps.sun, (f"{name}.sun", g.sun_teeth, pitch["sun"]))
+        gears.setdefault(ps.ring, (f"{name}.ring", g.ring_teeth, pitch["ring"]))
+        sun, ring = geo.nodes[ps.sun[0]][ps.sun[1]], geo.nodes[ps.ring[0]][ps.ring[1]]
+        for n, planet in enumerate(ps.planets):
+            gears.setdefault((planet, 0), (f"{name}.sun{n}", g.planet_teeth, pitch["planet"]))
+            centre = geo.nodes[planet][0]
+            geo.meshes.append(
+                MeshShape(
+                    f"{name}.sun{n}",
+                    ps.sun,
+                    (planet, 0),
+                    sun,
+                    centre,
+                    g.sun_teeth,
+                    g.planet_teeth,
+                    pitch["sun"],
+                    pitch["planet"],
+                )
+            )
+            geo.meshes.append(
+                MeshShape(
+                    f"{name}.ring{n}",
+                    (planet, 0),
+                    ps.ring,
+                    centre,
+                    ring,
+                    g.planet_teeth,
+                    g.ring_teeth,
+                    pitch["planet"],
+                    pitch["ring"],
+                    internal=True,
+                )
+            )
 
 
 def _support(

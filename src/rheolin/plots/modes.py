@@ -139,7 +139,13 @@ def mode_shapes_figure(model: Any, speed: float, *, n_modes: int = 12, first: in
     """Modes ``first .. first + n_modes - 1`` (at most :data:`MAX_MODES`) of ``model`` at
     ``speed`` [rad/s] (see the module docstring). Titles give the damped frequency, the
     damping ratio and the kind (:func:`~rheolin.stability.modes.mode_kind`)."""
-    from ..stability.modes import averaged_modes, mode_energy, mode_kind, whirl_ratio
+    from ..stability.modes import (
+        averaged_modes,
+        mode_energy,
+        mode_kind,
+        planetary_kinds,
+        whirl_ratio,
+    )
 
     a = model.assemble(float(speed))
     count = min(int(n_modes), MAX_MODES)
@@ -147,6 +153,7 @@ def mode_shapes_figure(model: Any, speed: float, *, n_modes: int = 12, first: in
     axes = {b: model.bodies[b].axis for b in model.bodies}
     ratio = whirl_ratio(modes.shapes, a.dof_labels, axes, a.plan.spin)
     kinds = mode_kind(mode_energy(modes.shapes, a.dof_labels, axes, a.system.M[0]), ratio)
+    kinds = planetary_kinds(kinds, modes.shapes, model, a)
     picks = list(range(first, modes.eigenvalues.size))[:count]
     cols = 3 if len(picks) <= 6 else 4
     rows = max(math.ceil(len(picks) / cols), 1)

@@ -64,10 +64,12 @@ def orbits_figure(ds: xr.Dataset, nodes: Sequence[str] | None = None) -> Figure:
     n = ds["harmonic"].values.astype(float)
     w1 = float(ds.attrs["base_frequency"])
     markers = json.loads(ds.attrs.get("markers_json", "{}"))
+    orbits = json.loads(ds.attrs.get("orbits_json", "{}"))  # planets: their carrier's speed
     fmax = float(ds["frequency"].max())
     for ax, node in zip(axes[0], nodes, strict=True):
         body = str(ds["body"].sel(node=node).values)
-        period = 1.0 / markers.get(f"{body} 1x", w1 / (2 * math.pi))
+        period = 1.0 / orbits.get(body, markers.get(f"{body} 1x", w1 / (2 * math.pi)))
+        span = f"one orbit of {body}" if body in orbits else f"one {body} revolution"
         samples = int(min(max(2000, 24 * fmax * period), 30000))
         t = np.linspace(0.0, period, samples)
         coef = q.sel(node=node).values * np.where(n > 0, 2.0, 1.0)[:, None]  # (harmonic, 2)
@@ -85,7 +87,7 @@ def orbits_figure(ds: xr.Dataset, nodes: Sequence[str] | None = None) -> Figure:
         ax.set_xlabel(f"ux - static [{unit}]")
         ax.set_ylabel(f"uy - static [{unit}]")
         ax.set_title(
-            f"{node}: one {body} revolution\nstatic position ({static[0]:.3g}, {static[1]:.3g}) µm",
+            f"{node}: {span}\nstatic position ({static[0]:.3g}, {static[1]:.3g}) µm",
             fontsize=9,
         )
         ax.grid(alpha=0.3)

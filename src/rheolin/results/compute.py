@@ -67,6 +67,19 @@ def harmonic_set(a: Assembled, order: int = 2, max_order: float | None = None) -
     return hset
 
 
+def _mechanism(model: Model, a: Any, res: Any) -> str:
+    """The label of an unstable lattice result's mechanism. Bodies written in their own
+    frames (a large model, docs/stability.md section 8) turn an asymmetric shaft's band into a
+    time-invariant instability there: named so."""
+    from ..stability.mechanism import ASYMMETRY, CIRCULATORY, ROTATING_DAMPING, identify
+
+    mech = identify(model, a, res)
+    frames = (res.info.get("band") or {}).get("frames") or []
+    if frames and mech.category in (CIRCULATORY, ROTATING_DAMPING):
+        return f"{ASYMMETRY} (time-invariant in the frame of {', '.join(frames)})"
+    return str(mech.label)
+
+
 def solve_point(
     model: Model,
     speed: float,
@@ -120,9 +133,7 @@ def solve_point(
         )
     res = sol.floquet
     if res is not None and not res.stable and res.method == "lattice":
-        from ..stability.mechanism import identify
-
-        sol.info["stability_mechanism"] = identify(model, a, res).label
+        sol.info["stability_mechanism"] = _mechanism(model, a, res)
     settings = dict(method=method, order=order, max_order=max_order, rtol=rtol)
     positions = {(b.name, i): x for b in model.bodies.values() for i, x in enumerate(b.positions)}
     return OperatingPoint(a, hset, sol, time.perf_counter() - t0, settings, positions)

@@ -24,7 +24,7 @@ from ..mechanics.assembly import Assembled
 from ..mechanics.joints import COMPONENTS
 from ..solvers.solution import Solution
 from .compute import OperatingPoint
-from .outputs import bearing_force_array, transmission_error_array
+from .outputs import bearing_force_array, global_displacements, transmission_error_array
 from .units import significant, with_units
 
 __all__ = [
@@ -33,6 +33,7 @@ __all__ = [
     "floquet_attrs",
     "frequency_markers",
     "netcdf_engine",
+    "orbit_frequencies",
     "point_dataset",
     "stability_text",
     "write_dataset",
@@ -139,7 +140,7 @@ def point_dataset(
     order = harmonics * float(a.base_ratio)
     nodes = list(a.node_index)
     idx = np.array([6 * a.node_index[k] + np.arange(6) for k in nodes])  # (node, 6)
-    q = sol.q[keep][:, idx]  # (harmonic, node, component)
+    q = global_displacements(sol, a)[:, idx]  # (harmonic, node, component), global axes
     coords: dict[str, Any] = {
         "harmonic": ("harmonic", harmonics),
         "frequency": ("harmonic", freq, {"units": "Hz"}),
@@ -189,6 +190,8 @@ def point_dataset(
     coords["iteration"] = ("iteration", np.arange(1, hist.size + 1))
     ds = xr.Dataset(data, coords=coords)
     ds.attrs["markers_json"] = json.dumps(frequency_markers(a))
+    if a.frames is not None and a.frames.planets():
+        ds.attrs["orbits_json"] = json.dumps(orbit_frequencies(a))
     ds.attrs.update(
         {
             "title": f"rheolin steady state{': ' + model_name if model_name else ''}",
@@ -242,9 +245,27 @@ def netcdf_engine() -> str:
 
 def frequency_markers(a: Assembled) -> dict[str, float]:
     """Named frequencies [Hz] for plots: each shaft's speed (1x) and each mesh frequency."""
-    out = {f"{b} 1x": abs(s) * a.omega / (2 * math.pi) for b, s in a.plan.spin.items() if s}
+    planets = set() if a.frames is None else set(a.frames.planets())
+    out = {
+        f"{b} 1x": abs(s) * a.omega / (2 * math.pi)
+        for b, s in a.plan.spin.items()
+        if s and b not in planets
+    }
     for name, (_, _, n) in a.meshes.items():
-        out[f"{name} mesh"] = abs(n) * a.omega / (2 * math.pi)
+        label = name.split(".")[0] if name.split(".")[0] in a.plan.sets else name  # one per set
+        out[f"{label} mesh"] = abs(n) * a.omega / (2 * math.pi)
+    return out
+
+
+def orbit_frequencies(a: Assembled) -> dict[str, float]:
+    """Each planet's orbit frequency [Hz], its carrier's speed (for the orbit plots)."""
+    if a.frames is None:
+        return {}
+    out = {}
+    for name, (_, spin, _) in a.frames.sets.items():
+        for planet in a.frames.planets():
+            if planet.startswith(f"{name}.planet"):
+                out[planet] = abs(spin) * a.omega / (2 * math.pi)
     return out
 
 

@@ -33,7 +33,7 @@ import scipy.sparse.linalg as spla
 from ..budget import MemoryBudgetError, format_bytes, memory_budget
 from ..errors import ModelError
 from ..harmonics.hill_lattice import LatticeHill
-from ..harmonics.lattice import Lattice, harmonic_lattice, system_lattice
+from ..harmonics.lattice import Lattice, coupling_costs, harmonic_lattice, system_lattice
 from ..harmonics.sets import TruncationWarning
 from ..linalg.direct import analyze, resolve_backend
 from ..system.periodic import PeriodicSystem
@@ -229,6 +229,21 @@ def _solve(analysis: Any, Q: sp.csc_array, rhs: np.ndarray) -> np.ndarray | None
     return None
 
 
+def _turned(
+    C_out: dict[int, np.ndarray], x: np.ndarray, links: np.ndarray | None, sidebands: np.ndarray
+) -> np.ndarray:
+    """``y_m = sum_k C_k q_{m-k}`` on the lattice's sidebands (``q = links x``)."""
+    q = x if links is None else np.einsum("fj,hji->hfi", links, x)
+    y = np.zeros((sidebands.size, next(iter(C_out.values())).shape[0], x.shape[2]), complex)
+    where = {int(h): j for j, h in enumerate(sidebands)}
+    for k, C in C_out.items():
+        for j, m in enumerate(sidebands):
+            src = where.get(int(m) - k)
+            if src is not None:
+                y[j] += C @ q[src]
+    return y
+
+
 def parse_dof(text: str | tuple[str, int, str], labels: Sequence[tuple[str, int, str]]) -> int:
     """The global DOF of ``"body:node:component"`` (or a tuple) among ``labels``.
 
@@ -285,7 +300,9 @@ def frequency_response(
     outputs default to the inputs). A unit force (or moment) at each input in turn, at each
     frequency; ``unbalance=True`` scales it by ``w^2`` (the force of a unit ``m e`` turning at
     ``w``). ``order``: the lattice order for a time-periodic model (default 2). See the module
-    docstring for the convention. ``progress(done)`` is called after each frequency.
+    docstring for the convention. ``progress(done)`` is called after each frequency. Inputs
+    and outputs are in global axes, also on bodies written in a planetary set's carrier axes
+    (docs/planetary.md).
 
     >>> import numpy as np, rheolin as rl
     >>> m = rl.Model()
@@ -304,6 +321,7 @@ def frequency_response(
     def name(x: str | tuple[str, int, str]) -> str:
         return x if isinstance(x, str) else f"{x[0]}:{x[1]}:{x[2]}"
 
+    frames = getattr(assembled, "frames", None)
     res = system_frequency_response(
         assembled.system,
         frequencies,
@@ -313,6 +331,7 @@ def frequency_response(
         unbalance=unbalance,
         budget=budget,
         progress=progress,
+        rotation=None if frames is None else frames.rotation(assembled.system.n),
     )
     res.inputs = [name(x) for x in inputs]
     res.outputs = res.inputs if outputs is None else [name(x) for x in outputs]
@@ -330,8 +349,14 @@ def system_frequency_response(
     unbalance: bool = False,
     budget: Any = None,
     progress: Callable[[int], None] | None = None,
+    rotation: dict[int, Any] | None = None,
 ) -> FrequencyResponse:
-    """:func:`frequency_response` of a :class:`~rheolin.PeriodicSystem` (DOFs by index)."""
+    """:func:`frequency_response` of a :class:`~rheolin.PeriodicSystem` (DOFs by index).
+
+    ``rotation``: ``T(t) = sum_k T_k exp(i k w1 t)`` when some DOFs are written in rotating
+    axes (global displacements ``q = T z``): a force in global axes acts through ``T^T`` on
+    the sidebands ``k``, and the response is turned back, ``y_m = sum_k T_k z_{m-k}``.
+    """
     w = np.atleast_1d(np.asarray(frequencies, dtype=float))
     if w.ndim != 1 or w.size == 0 or not np.all(np.isfinite(w)) or np.any(w < 0):
         raise ModelError("frequencies: need one or more finite excitation frequencies >= 0")
@@ -345,17 +370,24 @@ def system_frequency_response(
     if p < 0:
         raise ModelError(f"order: must be >= 0, got {order}")
     # inputs and outputs through the rigid links (eliminated): f_r = T^T f, q = T y
+    turn = {0: sp.identity(n, format="csr")} if rotation is None else rotation
+    links = None
     if system.constraint is not None:
-        T = system.constraint.transform()
+        links = system.constraint.transform().toarray()
         system = system.constraint.reduce(system)
         n = system.n
-        B_in = np.asarray(T.T.toarray()[:, inp], dtype=complex)
-        C_out = T.toarray()[out, :]
-    else:
-        B_in = np.eye(n, dtype=complex)[:, inp]
-        C_out = np.eye(n)[out, :]
+    B_in = {}
+    for k, R in turn.items():  # the global force's sidebands on the (rotating) DOFs
+        f = np.asarray(sp.csr_array(R).T[:, inp].toarray(), dtype=complex)
+        if np.any(f):
+            B_in[int(k)] = f if links is None else links.T @ f
+    C_out = {int(k): sp.csr_array(R)[out, :].toarray() for k, R in turn.items()}
+    turns = {abs(int(k)): 1 for k in B_in if k}  # a rotating frame's sidebands, always kept
     if system.time_invariant:
-        lat: Lattice = harmonic_lattice({}, 0)
+        lat: Lattice = harmonic_lattice(turns, 1 if turns else 0)
+    elif turns:
+        costs = {**turns, **coupling_costs(system)}
+        lat = harmonic_lattice(costs, max(p, 1), max_size=10**6)
     else:
         try:
             lat = system_lattice(system, p, max_size=10**6)
@@ -371,9 +403,16 @@ def system_frequency_response(
             f"{format_bytes(limit)}: lower the lattice order"
         )
     nh = lat.indices.size
-    i0 = lat.position(0)
     rhs = np.zeros((n * nh, inp.size), dtype=complex)
-    rhs[i0 * n : (i0 + 1) * n] = B_in  # the inputs act at the excitation frequency
+    for k, f in B_in.items():  # the inputs act at the excitation frequency (and its turns)
+        try:
+            i = lat.position(k)
+        except KeyError:
+            raise ModelError(
+                f"the FRF's lattice of order {lat.order} lacks the carrier harmonic {k} that a "
+                "force on a body in a carrier's axes needs: raise the order"
+            ) from None
+        rhs[i * n : (i + 1) * n] = f
     boundary = lat.boundary
     resp = np.full((w.size, nh, out.size, inp.size), np.nan + 0j)
     worst = 0.0
@@ -390,13 +429,13 @@ def system_frequency_response(
         if x is None:  # singular: an undamped resonance, or a free body at 0
             singular.append(float(wi))
             continue
-        if nh > 1 and np.any(boundary):
+        if nh > 1 and np.any(boundary) and not system.time_invariant:
             blocks = np.abs(x.reshape(nh, n, inp.size)) ** 2
             per = blocks.sum(axis=1)
             total = per.sum(axis=0)
             worst = max(worst, float(np.max(per[boundary].sum(axis=0) / np.maximum(total, 1e-300))))
         scale = wi * wi if unbalance else 1.0
-        resp[i] = scale * np.einsum("oj,hji->hoi", C_out, x.reshape(nh, n, inp.size))
+        resp[i] = scale * _turned(C_out, x.reshape(nh, n, inp.size), links, lat.indices)
     if progress is not None:
         progress(w.size)
     info: dict[str, Any] = {

@@ -19,6 +19,7 @@ __all__ = [
     "HarmonicRow",
     "bearing_force_array",
     "bearing_forces",
+    "global_displacements",
     "node_displacements",
     "transmission_error_array",
     "transmission_errors",
@@ -51,6 +52,45 @@ def _half(sol: Solution, dofs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return sol.harmonics[keep], sol.q[keep][:, dofs]
 
 
+def _convolve(sol: Solution, series: dict, dofs: np.ndarray | None = None) -> np.ndarray:
+    """``y_n = sum_k X_k q_{n-k}`` for the harmonics ``n >= 0`` of the solution (``X_k``
+    matrices or sparse arrays acting on ``q``, or vectors: then ``y_n = X_k^T q``)."""
+    H = sol.harmonics
+    m = H[H >= 0]
+    Q = sol.q if dofs is None else sol.q[:, dofs]
+    out: np.ndarray | None = None
+    for k, X in series.items():
+        n = m - k
+        j = np.clip(np.searchsorted(H, n), 0, H.size - 1)
+        hit = H[j] == n
+        part = Q[j[hit]] @ (X.T if getattr(X, "ndim", 1) == 2 else X)
+        if out is None:
+            out = np.zeros((m.size, *part.shape[1:]), dtype=complex)
+        out[hit] += part
+    assert out is not None
+    return out
+
+
+def global_displacements(sol: Solution, a: Assembled) -> np.ndarray:
+    """``q_n`` (``n >= 0``, every DOF) in global axes: the DOFs of bodies written in a planetary
+    set's carrier axes (docs/planetary.md) turned back, ``q = T(t) z``.
+
+    >>> import rheolin as rl
+    >>> from rheolin.mechanics.model import Model
+    >>> m = Model()
+    >>> m.add_rigid_body("r", (0, 0, 0), 1.0, (1e-3, 1e-3, 2e-3))
+    >>> m.add_bearing("b", "r", 0, 1e6, 10.0, components=None)
+    >>> m.add_force("f", "r", 0, force=(1.0, 0, 0), order=1)
+    >>> a = m.assemble(100.0)
+    >>> sol = rl.solve(a.system, [1])
+    >>> bool(np.allclose(global_displacements(sol, a), sol.q[sol.harmonics >= 0]))
+    True
+    """
+    if a.frames is None:
+        return sol.q[sol.harmonics >= 0]
+    return _convolve(sol, a.frames.rotation(a.system.n))
+
+
 def node_displacements(sol: Solution, a: Assembled, body: str, node: int) -> list[HarmonicRow]:
     """Harmonics of ``(ux, uy, uz, phix, phiy, phiz)`` of one node.
 
@@ -67,6 +107,12 @@ def node_displacements(sol: Solution, a: Assembled, body: str, node: int) -> lis
     >>> rows[0].harmonic, round(rows[0].frequency_hz, 3), rows[0].orders
     (1, 15.915, {'r': 1.0})
     """
+    if a.frames is not None:
+        return _rows(
+            a,
+            sol.harmonics[sol.harmonics >= 0],
+            global_displacements(sol, a)[:, a.dofs(body, node)],
+        )
     return _rows(a, *_half(sol, a.dofs(body, node)))
 
 
@@ -113,8 +159,11 @@ def bearing_forces(sol: Solution, a: Assembled, name: str) -> list[HarmonicRow]:
 def transmission_error_array(
     sol: Solution, a: Assembled, name: str
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The harmonics ``n >= 0`` and ``delta_n = w^T q_n`` [m] of mesh ``name``."""
+    """The harmonics ``n >= 0`` and ``delta_n = w^T q_n`` [m] of mesh ``name`` (a mesh whose
+    ``w`` turns, ``{k: w_k}``: ``delta_n = sum_k w_k^T q_{n-k}``)."""
     term, w, _ = a.meshes[name]
+    if isinstance(w, dict):
+        return sol.harmonics[sol.harmonics >= 0], _convolve(sol, w, term.dofs)
     n, Q = _half(sol, term.dofs)
     return n, Q @ w
 

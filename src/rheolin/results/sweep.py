@@ -19,7 +19,7 @@ from ..mechanics.joints import COMPONENTS
 from ..mechanics.model import Model
 from .compute import OperatingPoint, solve_point
 from .dataset import frequency_markers
-from .outputs import bearing_force_array, transmission_error_array
+from .outputs import bearing_force_array, global_displacements, transmission_error_array
 
 __all__ = [
     "point_amplitudes",
@@ -42,7 +42,7 @@ def point_amplitudes(point: OperatingPoint) -> dict[str, xr.DataArray]:
     nodes = list(a.node_index)
     ix, iy = COMPONENTS.index("ux"), COMPONENTS.index("uy")
     idx = np.array([6 * a.node_index[k] for k in nodes], dtype=np.int64)
-    q = sol.q[keep]
+    q = global_displacements(sol, a)
     coords: dict[str, Any] = {
         "harmonic": ("harmonic", harmonics),
         "node": ("node", [f"{b}:{i}" for b, i in nodes]),

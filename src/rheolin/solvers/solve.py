@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ..budget import format_bytes, memory_budget
+from ..budget import MemoryBudgetError, format_bytes, memory_budget
 from ..floquet import Continuation, dense_stability_harmonics, floquet, floquet_memory
 from ..harmonics.balance import HarmonicBalance, SingularBlockError
 from ..harmonics.sets import HarmonicSet, as_harmonic_set
@@ -279,7 +279,19 @@ def _check_stability(
                 f"{format_bytes(limit)} (raise RHEOLIN_MEMORY_BUDGET, or reduce the model)"
             )
             return sol
-    res = floquet(system, continuation=continuation)
+    try:
+        res = floquet(system, continuation=continuation)
+    except MemoryBudgetError as exc:
+        if stability:  # asked for explicitly: the caller refuses with the estimate
+            raise
+        sol.message += f"; stability not checked: {exc}"
+        return sol
+    except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as exc:
+        # a numerical failure of the check (a factorization, an eigensolver that did not
+        # converge) leaves the verdict open; the solve itself stands
+        sol.message += f"; stability not checked: {exc}"
+        sol.info["stability_error"] = f"{type(exc).__name__}: {exc}"
+        return sol
     sol.floquet = res
     sol.stable, sol.max_floquet_real = res.stable, res.max_real
     if not res.decided:
@@ -289,10 +301,14 @@ def _check_stability(
             if res.lattice is not None
             else f"the Hill truncation ({size} harmonics)"
         )
-        sol.message += (
-            f"; {what} did not converge for every Floquet exponent: the stability verdict "
-            "is uncertain"
-        )
+        band = res.info.get("band") or {}
+        if band and not band.get("certified", True):
+            sol.message += f"; stability undecided: {band.get('reason')}"
+        else:
+            sol.message += (
+                f"; {what} did not converge for every Floquet exponent: the stability verdict "
+                "is uncertain"
+            )
     if not res.stable and sol.success:
         sol.success, sol.status = False, 4
         sol.message += (

@@ -8,7 +8,15 @@ from typing import Any
 
 import numpy as np
 
-from .modes import WHIRL_THRESHOLD, averaged_modes, mac, mode_energy, mode_kind, whirl_ratio
+from .modes import (
+    WHIRL_THRESHOLD,
+    averaged_modes,
+    mac,
+    mode_energy,
+    mode_kind,
+    planetary_kinds,
+    whirl_ratio,
+)
 
 __all__ = ["CampbellResult", "CriticalSpeed", "campbell", "order_lines"]
 
@@ -180,11 +188,14 @@ def order_lines(model: Any, speed: float = 1.0) -> dict[str, float]:
     """
     plan = model.speed_plan()
     out: dict[str, float] = {}
+    planets = {b for s in getattr(model, "planetary", {}).values() for b in s.planets}
     for body, ratio in plan.ratios.items():
-        if ratio != 0:
+        if ratio != 0 and body not in planets:
             out[f"1x {body}"] = float(abs(ratio)) * speed
             out[f"2x {body}"] = 2 * float(abs(ratio)) * speed
     for name, harmonic in zip(model.meshes, plan.mesh, strict=True):
+        out[f"mesh {name}"] = float(harmonic * plan.base) * speed
+    for name, harmonic in plan.sets.items():  # planetary sets: one mesh frequency each
         out[f"mesh {name}"] = float(harmonic * plan.base) * speed
     return out
 
@@ -259,7 +270,8 @@ def campbell(
         axes = {b: model.bodies[b].axis for b in model.bodies}
         ratio = whirl_ratio(modes.shapes, a.dof_labels, axes, a.plan.spin)
         energy = mode_energy(modes.shapes, a.dof_labels, axes, a.system.M[0])
-        rows.append((modes, ratio, mode_kind(energy, ratio)))
+        kinds = planetary_kinds(mode_kind(energy, ratio), modes.shapes, model, a)
+        rows.append((modes, ratio, kinds))
         if progress is not None:
             progress(len(rows))
     width = max(m.eigenvalues.size for m, _, _ in rows)

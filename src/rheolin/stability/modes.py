@@ -19,7 +19,15 @@ from ..harmonics.hill import hill_pencil, state_scaling
 from ..mechanics.rotation import transverse_basis
 from ..system.periodic import PeriodicSystem
 
-__all__ = ["AveragedModes", "averaged_modes", "mac", "mode_energy", "mode_kind", "whirl_ratio"]
+__all__ = [
+    "AveragedModes",
+    "averaged_modes",
+    "mac",
+    "mode_energy",
+    "mode_kind",
+    "planetary_kinds",
+    "whirl_ratio",
+]
 
 #: Above this first-order size the averaged modes are found by shift-invert.
 DENSE_MODES_LIMIT = 1200
@@ -283,6 +291,32 @@ def mode_kind(energy: np.ndarray, whirl: np.ndarray) -> np.ndarray:
         else:
             a, b = np.argsort(-row, kind="stable")[:2]
             out[m] = f"coupled ({KINDS[int(a)]}+{KINDS[int(b)]})"
+    return out
+
+
+def planetary_kinds(kinds: np.ndarray, shapes: np.ndarray, model: Any, a: Any) -> np.ndarray:
+    """``kinds`` with the modes that live in a planetary set labelled by Lin & Parker's types
+    (:mod:`rheolin.mechanics.planetary_modes`): ``"rotational (stage1)"``, ``"translational
+    (stage1)"``, ``"planet (stage1)"``, ``"coupled (stage1)"``; the others unchanged."""
+    sets = getattr(model, "planetary", {})
+    if not sets:
+        return kinds
+    from ..mechanics.planetary_modes import SetDofs, planetary_mode_kinds
+
+    out = np.asarray(kinds, dtype=object).copy()
+    M0 = a.system.M[0]
+    m = np.asarray(M0.diagonal() if sp.issparse(M0) else np.diag(M0), dtype=float)
+    for name, s in sets.items():
+        members = [a.dofs(*ref) for ref in (s.sun, s.ring, s.carrier)]
+        dofs = SetDofs(
+            np.concatenate([d[:2] for d in members]),
+            np.array([d[5] for d in members]),
+            np.concatenate([a.dofs(p, 0) for p in s.planets]),
+        )
+        labels = planetary_mode_kinds(shapes, m, dofs)
+        for j, lab in enumerate(labels):
+            if lab:
+                out[j] = f"{lab} ({name})"
     return out
 
 

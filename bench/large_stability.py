@@ -1,0 +1,141 @@
+"""Floquet verdicts of models past the dense limit (the band method, docs/stability.md
+section 8) beside their steady-state solve, in one process (not a test).
+
+Rows, each a model at one speed: the solve (``solve_point``, stability off, the file's
+harmonics or ``--order``/``--max-order``) and the verdict (``rl.floquet`` of the assembled
+system, default options), wall and CPU seconds, their ratio, the verdict, the band (modes,
+``kappa_C``), and the verdict's peak resident memory above the process.
+
+* the example rotor on ``--rotor`` shaft nodes (``6 N`` DOF) at 3000 and 4220 rpm;
+* the gearbox with every shaft element split (``--gearbox`` DOFs, rheolin.data.fine);
+* ``--runup N``: the gearbox over N speeds with a :class:`~rheolin.floquet.Continuation`.
+
+Usage::
+
+    OPENBLAS_NUM_THREADS=1 python bench/large_stability.py --rotor 101 401 1001 \\
+        --gearbox 20000 --out bench/results/large_stability.md
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).parent))
+import rheolin as rl
+from _memory import reset_peak, status_kb
+from rheolin.data.fine import refined_example
+from rheolin.floquet import Continuation
+from rheolin.io import parse_model
+from rheolin.results.compute import solve_point
+
+RPM = np.pi / 30
+
+
+def timed(fn: Any) -> tuple[Any, float, float, float]:
+    """``(result, wall s, cpu s, peak MB above the process)``."""
+    gc.collect()
+    base = status_kb("VmRSS")
+    reset_peak()
+    t, c = time.perf_counter(), time.process_time()
+    out = fn()
+    wall, cpu = time.perf_counter() - t, time.process_time() - c
+    return out, wall, cpu, max(status_kb("VmHWM") - base, 0) / 1024
+
+
+def row(name: str, text: str, rpm: float, order: int | None, max_order: float | None) -> str:
+    lm = parse_model(text)
+    model = lm.model
+    h = lm.spec.harmonics
+    o = h.order if order is None else order
+    mo = h.max_order if max_order is None else max_order
+    point, s_wall, s_cpu, _ = timed(
+        lambda: solve_point(model, rpm * RPM, order=o, max_order=mo, stability=False)
+    )
+    system = point.assembled.system
+    res, f_wall, f_cpu, peak = timed(lambda: rl.floquet(system))
+    band = res.info.get("band") or {}
+    verdict = ("stable" if res.stable else "unstable") + ("" if res.decided else ", undecided")
+    line = (
+        f"| {name} | {system.n:,} | {rpm:g} | {s_wall:.2f} / {s_cpu:.2f} | "
+        f"{f_wall:.2f} / {f_cpu:.2f} | {f_cpu / max(s_cpu, 1e-9):.2f} | {verdict} | "
+        f"{res.max_real:.6g} | {band.get('modes', '-')} | {band.get('kappa', float('nan')):.3g} | "
+        f"{peak:.0f} |"
+    )
+    print(line, flush=True)
+    return line
+
+
+def runup(text: str, speeds: np.ndarray) -> str:
+    """Verdicts over a run-up with a continuation: per-speed CPU seconds and the verdicts."""
+    model = parse_model(text).model
+    template = model.speed_template()
+    cont = Continuation()
+    cpu, decided, unstable = [], 0, 0
+    for rpm in speeds:
+        system = template.assemble(rpm * RPM).system
+        c = time.process_time()
+        res = rl.floquet(system, continuation=cont)
+        cpu.append(time.process_time() - c)
+        decided += int(res.decided)
+        unstable += int(not res.stable)
+        print(
+            f"  {rpm:.1f} rpm: {res.max_real:.5g} decided {res.decided} {cpu[-1]:.2f} s", flush=True
+        )
+    return (
+        f"Run-up over {len(speeds)} speeds ({speeds[0]:g}-{speeds[-1]:g} rpm) with a "
+        f"continuation: {decided} decided, {unstable} unstable; CPU per verdict median "
+        f"{np.median(cpu):.2f} s, first {cpu[0]:.2f} s, total {sum(cpu):.0f} s.\n"
+    )
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--rotor", type=int, nargs="*", default=[401], help="shaft nodes (odd)")
+    ap.add_argument("--gearbox", type=int, nargs="*", default=[], help="DOFs")
+    ap.add_argument("--gearbox-speeds", type=float, nargs="*", default=[3000.0])
+    ap.add_argument("--order", type=int, default=2, help="gearbox solve: closure order")
+    ap.add_argument("--max-order", type=float, default=60.0, help="gearbox solve: cut-off")
+    ap.add_argument("--runup", type=int, default=0, help="gearbox run-up speeds (0: none)")
+    ap.add_argument("--out", default=None)
+    args = ap.parse_args()
+    head = (
+        "| model | DOF | rpm | solve s (wall / CPU) | verdict s (wall / CPU) | CPU ratio | "
+        "verdict | largest real part 1/s | band modes | kappa_C | verdict peak MB |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|\n"
+    )
+    print(head, end="")
+    rows = []
+    for nodes in args.rotor:
+        for rpm in (3000.0, 4220.0):
+            rows.append(
+                row(f"rotor, {nodes} nodes", refined_example("rotor", nodes), rpm, None, None)
+            )
+    for dof in args.gearbox:
+        text = refined_example("gearbox", dof=dof)
+        for rpm in args.gearbox_speeds:
+            rows.append(row("gearbox, fine shafts", text, rpm, args.order, args.max_order))
+    tail = ""
+    if args.runup and args.gearbox:
+        speeds = np.linspace(1000.0, 5000.0, args.runup)
+        tail = runup(refined_example("gearbox", dof=args.gearbox[0]), speeds)
+    command = "OPENBLAS_NUM_THREADS=1 python bench/large_stability.py " + " ".join(sys.argv[1:])
+    text = (
+        "# Floquet verdicts past the dense limit\n\n"
+        f"`{command}`, one process on a shared 2-core machine (wall times vary with the load;"
+        " CPU times are this process's).\n\n" + head + "\n".join(rows) + "\n\n" + tail
+    )
+    print(text)
+    if args.out:
+        Path(args.out).write_text(text)
+        print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()

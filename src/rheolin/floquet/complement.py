@@ -1,0 +1,389 @@
+"""What a band of time-averaged modes leaves out, bounded (docs/stability.md, section 8).
+
+Two certificates make the band search (:mod:`rheolin.floquet.band`) complete:
+
+* the **energy bound**: every time-averaged eigenvalue with ``|lambda|`` above a radius ``r``
+  has ``Re <= 0`` when ``K_s + r^2 M`` and ``D_s - i N / r`` are positive definite (``K_s``,
+  ``N`` the symmetric and skew parts of ``K_0``, ``D_s`` that of ``D_0``): two sparse
+  factorizations (:func:`energy_certificate`);
+* the **small-gain bound**: no exponent with ``Re >= 0`` comes from the modes outside the band
+  when ``kappa_C(s) = sum_k ||H_C(s) E_k(s - i k w1)|| < 1`` on the imaginary axis, ``H_C`` the
+  time-averaged transfer function between the DOFs the time variation touches minus its band
+  part; a frequency scan (:class:`Scan`). It also gives ``beta*``, by which each band mode's
+  Gershgorin radius grows (the coupling through the modes left out).
+
+>>> import numpy as np, rheolin as rl
+>>> s = rl.PeriodicSystem(1.0, M={0: np.eye(2)}, D={0: 0.1 * np.eye(2)},
+...                       K={0: np.diag([4.0, 9.0])})
+>>> energy_certificate(s, 0.0)[0], round(energy_radius(s), 6)
+(True, 0.0)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ..system.periodic import PeriodicSystem
+
+__all__ = [
+    "KAPPA_LIMIT",
+    "Complement",
+    "Scan",
+    "energy_certificate",
+    "energy_radius",
+    "touched_dofs",
+]
+
+#: The small-gain bound must stay below this (1 is the limit of the argument; the margin
+#: keeps ``beta*``, and with it the band's Gershgorin radii, moderate).
+KAPPA_LIMIT = 0.5
+
+#: Scan points per octave between the smallest and the largest frequency of the pencil.
+PER_OCTAVE = 3
+
+#: Power-iteration steps for a norm when the touched DOFs are too many for dense blocks.
+NORM_STEPS = 12
+
+#: Touched DOFs up to this many are handled as dense blocks; above, by operators.
+DENSE_TOUCHED = 400
+
+
+@dataclass
+class Complement:
+    """The certificates of the modes left out by a band (:class:`Scan`).
+
+    ``certified``: the small-gain bound holds (else ``reason`` says what failed and what to
+    change); ``energy``: the energy bound holds too (``energy_note`` says why not);
+    ``kappa`` the scan's largest ``kappa_C`` (at ``at`` rad/s), ``beta`` the radius factor,
+    ``p`` per band mode its coupling into the touched DOFs (``R_j += beta p_j``), ``g_max``
+    the largest ``||G_C||`` seen (for the truncation estimate), ``radius`` the energy bound's
+    radius tested, ``points`` the frequencies scanned.
+    """
+
+    certified: bool
+    reason: str = ""
+    energy: bool = False
+    energy_note: str = ""
+    kappa: float = float("inf")
+    at: float = float("nan")
+    beta: float = float("inf")
+    radius: float = float("nan")
+    g_max: float = float("inf")
+    points: int = 0
+    p: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "certified": self.certified,
+            "reason": self.reason,
+            "energy_bound": self.energy,
+            "energy_note": self.energy_note,
+            "kappa": self.kappa,
+            "kappa_at": self.at,
+            "beta": self.beta,
+            "energy_radius": self.radius,
+            "scan_points": self.points,
+        }
+
+
+def touched_dofs(system: PeriodicSystem) -> np.ndarray:
+    """The DOFs the time variation touches: rows and columns of every ``K_k, D_k, M_k``,
+    ``k != 0``."""
+    out: list[np.ndarray] = [np.zeros(0, dtype=np.int64)]
+    for table in (system.K, system.D, system.M):
+        for k, x in table.items():
+            if k == 0:
+                continue
+            coo = sp.coo_array(x)
+            nz = coo.data != 0
+            out += [coo.row[nz].astype(np.int64), coo.col[nz].astype(np.int64)]
+    return np.unique(np.concatenate(out))
+
+
+def _part(system: PeriodicSystem, table: dict) -> sp.csc_array:
+    x = table.get(0)
+    return sp.csc_array((system.n, system.n)) if x is None else sp.csc_array(x)
+
+
+def _positive_definite(A: Any) -> bool:
+    """True when the Hermitian sparse ``A`` is positive definite: a factorization with
+    symmetric (diagonal) pivots whose pivots are all positive (Sylvester's law of inertia)."""
+    A = sp.csc_array(A)
+    try:
+        lu = spla.splu(
+            A,
+            permc_spec="MMD_AT_PLUS_A",
+            diag_pivot_thresh=0.0,
+            options={"SymmetricMode": True},
+        )
+    except RuntimeError:  # exactly singular
+        return False
+    if not np.array_equal(lu.perm_r, lu.perm_c):
+        return False  # an off-diagonal pivot: not the LDL^H of a definite matrix
+    d = lu.U.diagonal()
+    return bool(np.all(d.real > 0) and np.all(np.abs(d.imag) <= 1e-10 * np.abs(d.real)))
+
+
+def energy_certificate(system: PeriodicSystem, radius: float) -> tuple[bool, str]:
+    """Whether every time-averaged eigenvalue with ``|lambda| > radius`` has ``Re <= 0``:
+    ``K_s + radius^2 M`` positive definite and ``D_s - i N / radius`` positive semidefinite
+    (tested with a shift of ``1e-9`` of the damping's diagonal scale). Returns
+    ``(ok, reason)``."""
+    M, D, K = (_part(system, t) for t in (system.M, system.D, system.K))
+    Ks, N = (K + K.T) / 2, (K - K.T) / 2
+    Ds = (D + D.T) / 2
+    ok_k = _positive_definite(Ks + radius * radius * M)
+    if not ok_k:
+        return False, (
+            f"K_s + r^2 M is not positive definite at r = {radius:.4g} rad/s: the "
+            "time-averaged stiffness softens faster than the band reaches"
+        )
+    # semidefinite, tested as definite after a shift of 1e-9 of the damping's largest
+    # diagonal entry (the bound then holds to a real part of that order)
+    eps = 1e-9 * max(float(np.abs(Ds.diagonal()).max(initial=0.0)), 1e-300)
+    skew = abs(N).max() if N.nnz else 0.0
+    if skew == 0.0:
+        ok_d = _positive_definite(Ds + eps * sp.identity(system.n, format="csc"))
+    else:
+        if radius <= 0:
+            return False, "circulatory stiffness terms and no band to bound them"
+        shifted = Ds.astype(complex) - 1j * N / radius + eps * sp.identity(system.n, format="csc")
+        ok_d = _positive_definite(shifted)
+    if not ok_d:
+        return False, (
+            f"D_s - i N / r is not positive semidefinite at r = {radius:.4g} rad/s: "
+            "circulatory terms without damping to match them (or negative damping)"
+        )
+    return True, ""
+
+
+def energy_radius(system: PeriodicSystem, top: float = 1e12) -> float:
+    """The smallest radius (to 1 %) at which :func:`energy_certificate` holds (``inf`` when
+    it does not hold up to ``top``)."""
+    if energy_certificate(system, 0.0)[0]:
+        return 0.0
+    lo, hi = 0.0, 1.0
+    while not energy_certificate(system, hi)[0]:
+        lo, hi = hi, hi * 4
+        if hi > top:
+            return float("inf")
+    while hi > 1.01 * max(lo, 1e-300) and hi - lo > 1e-12:
+        mid = np.sqrt(lo * hi) if lo > 0 else hi / 4
+        if energy_certificate(system, mid)[0]:
+            hi = mid
+        else:
+            lo = mid
+        if lo == 0 and hi < 1e-12:
+            break
+    return float(hi)
+
+
+def _norm2(apply: Any, adjoint: Any, dim: int, rng: np.random.Generator) -> float:
+    """The 2-norm of an operator by power iteration on ``A^H A`` (an estimate from below,
+    converged to about 1e-3 in a dozen steps on these transfer functions)."""
+    x = rng.standard_normal(dim) + 1j * rng.standard_normal(dim)
+    x /= np.linalg.norm(x)
+    value = 0.0
+    for _ in range(NORM_STEPS):
+        y = apply(x)
+        value_new = float(np.linalg.norm(y))
+        z = adjoint(y)
+        nz = float(np.linalg.norm(z))
+        if nz == 0 or value_new == 0:
+            return value_new
+        x = z / nz
+        if abs(value_new - value) <= 1e-3 * value_new:
+            return value_new
+        value = value_new
+    return value
+
+
+class Scan:
+    """The small-gain bound of the modes a band leaves out, on a frequency scan.
+
+    ``band`` is the :class:`~rheolin.floquet.band.BandAveraged` (balanced right and left
+    vectors ``X``, ``W``, eigenvalues ``lam``, scaling ``sq``, ``sv``) of ``system``.
+    """
+
+    def __init__(self, system: PeriodicSystem, band: Any) -> None:
+        self.system, self.band = system, band
+        n = system.n
+        self.n, self.w = n, system.omega
+        T = touched_dofs(system)
+        self.T = T
+        self.M0, self.D0, self.K0 = (_part(system, t) for t in (system.M, system.D, system.K))
+        sq, sv = band.sq[T], band.sv[T]
+        self.sq, self.sv = sq, sv
+        r = T.size
+        self.dense = r <= DENSE_TOUCHED
+        # balanced couplings on T: f_b = E_b (q_b, v_b), forces / sv, outputs (sq q, sv v)
+        self.E: dict[int, tuple[Any, Any, Any]] = {}
+        for k in system.coefficient_harmonics:
+            parts: list[Any] = []
+            for table, right in ((system.K, sq), (system.D, sv), (system.M, sv)):
+                x = table.get(k)
+                if x is None:
+                    parts.append(None)
+                    continue
+                block = sp.csr_array(x)[T][:, T]
+                block = sp.diags_array(1.0 / sv) @ block @ sp.diags_array(1.0 / right)
+                parts.append(block.toarray() if self.dense else sp.csr_array(block))
+            self.E[k] = (parts[0], parts[1], parts[2])
+        # band part at T: outputs (q, v) of the right vectors, force rows of the left ones
+        self.Y = np.concatenate([band.X[T], band.X[n + T]])  # 2r x m (balanced)
+        self.Wf = band.W[n + T]  # r x m
+        self.rng = np.random.default_rng(31)
+
+    # ------------------------------------------------------------------ one frequency
+    def coupling(self, k: int, s: complex) -> Any:
+        """``E_b,k(s) = [K_k, D_k + s M_k]`` on ``(q, v)`` at the touched DOFs, balanced."""
+        K, D, M = self.E[k]
+        r = self.T.size
+        if self.dense:
+            Eq = np.zeros((r, r), dtype=complex) if K is None else K
+            Ev = np.zeros((r, r), dtype=complex)
+            if D is not None:
+                Ev = Ev + D
+            if M is not None:
+                Ev = Ev + s * M
+            return np.hstack([Eq, Ev])
+        Z = sp.csr_array((r, r))
+        Eq = Z if K is None else K
+        Ev = (Z if D is None else D) + (Z if M is None else s * M)
+        return sp.hstack([Eq, Ev]).tocsr()
+
+    def at(self, omega: float) -> tuple[float, float, float, Any]:
+        """``(kappa_C, q_S, ||G_C||, lu)`` at ``s = i omega``: the small-gain sum, the band
+        modes' coupling through the rest, the rest's second-order transfer norm (unbalanced)."""
+        s = 1j * float(omega)
+        Q = sp.csc_array(self.K0 + s * self.D0 + (s * s) * self.M0)
+        try:
+            lu = spla.splu(Q, permc_spec="MMD_AT_PLUS_A")
+        except RuntimeError:
+            return float("inf"), float("inf"), float("inf"), None
+        band = self.band
+        c = 1.0 / (s - band.lam)
+        T, n, r = self.T, self.n, self.T.size
+        sq, sv = self.sq, self.sv
+        if self.dense:
+            F = np.zeros((n, r), dtype=complex)
+            F[T, np.arange(r)] = sv  # balanced unit forces
+            G = lu.solve(F)[T]
+            H = np.vstack([sq[:, None] * G, sv[:, None] * (s * G)])
+            HC = H - (self.Y * c) @ self.Wf.conj().T
+            kappa = qs = 0.0
+            for k in self.E:
+                P = HC @ self.coupling(k, s - 1j * k * self.w)
+                kappa += float(np.linalg.norm(P, 2))
+                qs += float(np.sum(np.linalg.norm(P @ self.Y, axis=0)))
+            GC = HC[:r] / sq[:, None] / sv[None, :]
+            return kappa, qs, float(np.linalg.norm(GC, 2)), lu
+        return self._operators(lu, s, c)
+
+    def _operators(self, lu: Any, s: complex, c: np.ndarray) -> tuple[float, float, float, Any]:
+        """:meth:`at` for many touched DOFs: the norms by power iteration."""
+        T, n, r = self.T, self.n, self.T.size
+        sq, sv, Y, Wf = self.sq, self.sv, self.Y, self.Wf
+
+        def hc(f: np.ndarray) -> np.ndarray:
+            F = np.zeros(n, dtype=complex)
+            F[T] = sv * f
+            g = lu.solve(F)[T]
+            return np.concatenate([sq * g, sv * (s * g)]) - Y @ (c * (Wf.conj().T @ f))
+
+        def hc_h(y: np.ndarray) -> np.ndarray:
+            yq, yv = y[:r], y[r:]
+            R = np.zeros(n, dtype=complex)
+            R[T] = sq * yq + np.conj(s) * sv * yv
+            g = lu.solve(R, trans="H")[T]
+            return sv * g - Wf @ (np.conj(c) * (Y.conj().T @ y))
+
+        kappa = qs = 0.0
+        for k in self.E:
+            E = self.coupling(k, s - 1j * k * self.w)
+            EH = E.conj().T
+            kappa += _norm2(
+                lambda x, E=E: hc(E @ x), lambda y, EH=EH: EH @ hc_h(y), 2 * r, self.rng
+            )
+            qs += float(sum(np.linalg.norm(hc(E @ Y[:, j])) for j in range(Y.shape[1])))
+
+        def gc(f: np.ndarray) -> np.ndarray:
+            return hc(f / sv * 1.0)[:r] / sq
+
+        def gc_h(y: np.ndarray) -> np.ndarray:
+            return hc_h(np.concatenate([y / sq, np.zeros(r)])) / sv
+
+        g = _norm2(gc, gc_h, r, self.rng)
+        return kappa, qs, g, lu
+
+    def nearest(self, lu: Any, omega: float, steps: int = 5) -> complex:
+        """The time-averaged eigenvalue nearest ``i omega`` (a few shift-invert steps with the
+        point's factor; first-order ``y = (q, v)``)."""
+        n, M0, D0 = self.n, self.M0, self.D0
+        s = 1j * float(omega)
+        y = self.rng.standard_normal(2 * n) + 0j
+        theta = 0j
+        for _ in range(steps):
+            q, v = y[:n], y[n:]
+            # (A - s B)^-1 B y with A = [[0, I], [-K, -D]], B = diag(I, M)
+            x = -lu.solve(M0 @ v + (D0 + s * M0) @ q)
+            z = np.concatenate([x, q + s * x])
+            nz = np.linalg.norm(z)
+            if nz == 0:
+                return complex("inf")
+            theta = np.vdot(y, z) / np.vdot(y, y)
+            y = z / nz
+        return complex(s + 1.0 / theta) if theta != 0 else complex("inf")
+
+    # ------------------------------------------------------------------ the scan
+    def run(self, top: float) -> Complement:
+        """The scan from a tenth of the smallest band frequency to ``top`` rad/s, refined at
+        the eigenvalue nearest each point when its peak may be narrower than the grid."""
+        band = self.band
+        low = max(float(np.min(np.abs(band.lam), initial=self.w)), 1e-6 * self.w)
+        low = min(low, self.w) / 10
+        count = max(int(np.ceil(PER_OCTAVE * np.log2(max(top / low, 2.0)))), 2)
+        grid = list(np.geomspace(low, top, count))
+        spacing = 2.0 ** (1.0 / PER_OCTAVE) - 1.0
+        seen: list[tuple[float, float, float, float]] = []
+        extra: list[float] = []
+        for omega in grid:
+            kap, qs, g, lu = self.at(omega)
+            seen.append((omega, kap, qs, g))
+            if lu is None:
+                continue
+            mu = self.nearest(lu, omega)
+            if not np.isfinite(mu) or mu.imag <= 0:
+                continue
+            near_band = np.min(np.abs(band.lam - mu), initial=np.inf) <= 1e-6 * abs(mu)
+            if not near_band and abs(mu.real) < spacing * mu.imag:
+                extra.append(float(mu.imag))
+        for omega in sorted(set(np.round(extra, 9))):
+            kap, qs, g, _ = self.at(omega)
+            seen.append((omega, kap, qs, g))
+        arr = np.array(seen)
+        kappa = arr[:, 1]
+        i = int(np.argmax(kappa))
+        out = Complement(
+            certified=False,
+            kappa=float(kappa[i]),
+            at=float(arr[i, 0]),
+            g_max=float(np.max(arr[:, 3])),
+            points=len(seen),
+        )
+        if np.all(kappa < 1.0):
+            out.beta = float(np.max(arr[:, 2] / (1.0 - kappa)))
+        # each band mode's coupling into the touched DOFs' forces: ||w_j^H J E_k|| summed
+        Wf = self.Wf
+        p = np.zeros(band.lam.size)
+        for k in self.E:
+            for j in range(band.lam.size):
+                E = self.coupling(k, band.lam[j] - 1j * k * self.w)
+                p[j] += float(np.linalg.norm(Wf[:, j].conj() @ E))
+        out.p = p
+        return out
