@@ -153,7 +153,8 @@ class SpeedTemplate:
         self.generators = harmonic_generators(model, plan)
         self.constraint = _links(model, dof, self.n_dof)
         self.whirl_pairs = _planes(model, dof)
-        self.frames = _frames(model, dof, plan)
+        # bodies in a carrier's axes are already in a rotating frame: no body frame on top
+        self.body_frames = () if self.frames else _frames(model, dof, plan)
         terms = self._body_terms(model)
         self.joints: dict[str, SpeedTerm] = {}
         #: speed-dependent joints: name -> (table, |speed ratio| of its body, DOFs)
@@ -339,7 +340,7 @@ class SpeedTemplate:
             constraint=self.constraint,
         )
         system.whirl_pairs = self.whirl_pairs
-        system.keep("body_frames", self.frames)
+        system.keep("body_frames", self.body_frames)
         return system
 
     def assemble(self, speed: float) -> Assembled:
