@@ -123,8 +123,8 @@ def test_gear_pair_mesh_stiffness_under_torque(torque: float) -> None:
     z1, z2, mod, alpha, b, k0 = 20, 50, 0.004, np.radians(20.0), 0.02, 4e8
     J1, J2, k_lat = 2e-3, 0.05, 1e12
     m = Model()  # gears held on stiff supports, their translations nearly massless
-    m.add_rigid_body("p", (0, 0, 0), 1e-6, (1e-9, 1e-9, J1))
-    m.add_rigid_body("g", (mod * (z1 + z2) / 2, 0, 0), 1e-6, (1e-9, 1e-9, J2))
+    m.add_rigid_body("p", (0, 0, 0), 1e-6, (J1 / 2, J1 / 2, J1))  # thin disks
+    m.add_rigid_body("g", (mod * (z1 + z2) / 2, 0, 0), 1e-6, (J2 / 2, J2 / 2, J2))
     for body in ("p", "g"):
         m.add_bearing(f"{body}_b", body, 0, stiffness=k_lat,
                       components=["ux", "uy", "uz", "phix", "phiy"])  # fmt: skip
@@ -306,8 +306,8 @@ def test_a_rectangular_wave_mesh_is_scaled_to_its_operating_stiffness() -> None:
     ``k_j / k_0`` is unchanged."""
     z1, z2, mod = 20, 50, 0.004
     m = Model()
-    m.add_rigid_body("p", (0, 0, 0), 0.5, (1e-4, 1e-4, 2e-3))
-    m.add_rigid_body("g", (mod * (z1 + z2) / 2, 0, 0), 3.0, (1e-2, 1e-2, 0.05))
+    m.add_rigid_body("p", (0, 0, 0), 0.5, (1e-3, 1e-3, 2e-3))
+    m.add_rigid_body("g", (mod * (z1 + z2) / 2, 0, 0), 3.0, (0.025, 0.025, 0.05))
     for body in ("p", "g"):
         m.add_bearing(f"{body}_b", body, 0, stiffness=1e10,
                       components=["ux", "uy", "uz", "phix", "phiy"])  # fmt: skip

@@ -24,8 +24,8 @@ def invoke():
     """``invoke(*args) -> Result`` with ``exit_code``, ``stdout``, ``stderr``."""
     runner = CliRunner()
 
-    def call(*args: str):
-        return runner.invoke(app, [str(a) for a in args], catch_exceptions=False)
+    def call(*args: str, env: dict[str, str] | None = None):
+        return runner.invoke(app, [str(a) for a in args], catch_exceptions=False, env=env)
 
     return call
 

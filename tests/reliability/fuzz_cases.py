@@ -25,8 +25,11 @@ ALLOWED_EXIT = {0, 1, 2}
 #: An ``error:`` message must name where the problem is: a field path, an option, or one of
 #: the model-level checks.
 FIELD = re.compile(
-    r"(\b(model|harmonics|shafts|rigid_bodies|condensed_bodies|meshes|forces|loads|mass)\b"
-    r"[\[.:]|--[a-z-]+|\.toml|invalid model file|rheolin \w+:)"
+    r"(\b(model|harmonics|shafts|rigid_bodies|condensed_bodies|meshes|forces|loads|mass|"
+    r"torques|rigid_links|bearings|fe|condense|interface|spec|memory|input)\b[\[.:]"
+    r"|--[a-z-]+|\.toml|invalid model file|rheolin \w+:|RHEOLIN_[A-Z_]+|DIRECTORY:"
+    r"|\b(bearing|mesh|torque|body) '[^']+'"
+    r"|\b(Shaft|Disk|Bearing|Seal)Element\w*|\bPointMass\w*|ROSS file)"
 )
 
 HOSTILE_TEXT = [
@@ -122,7 +125,9 @@ def _names(doc: dict[str, Any]) -> list[str]:
 
 
 @st.composite
-def mutated_model(draw: st.DrawFn, names: tuple[str, ...] = ("rotor", "gearbox")) -> str:
+def mutated_model(
+    draw: st.DrawFn, names: tuple[str, ...] = ("rotor", "gearbox", "preloaded")
+) -> str:
     """TOML text of an example with one to three mutations."""
     doc = example_document(draw(st.sampled_from(names)))
     for _ in range(draw(st.integers(1, 3))):
@@ -148,11 +153,16 @@ def mutated_model(draw: st.DrawFn, names: tuple[str, ...] = ("rotor", "gearbox")
                 parent[key] = parent[key] * factor
         elif kind == "size":
             size_paths = [p for p in _paths(doc) if p[-1] in ("order", "stiffness_harmonics")]
+            size_paths += [p for p in _paths(doc) if p[-1] == "positions" and len(p) == 3]
             if size_paths:
                 target = draw(st.sampled_from(size_paths))
-                _get(doc, target[:-1])[target[-1]] = draw(
-                    st.sampled_from([10**6, 10**9, 2**62, -3])
-                )
+                if target[-1] == "positions":  # a shaft too long to assemble
+                    n = draw(st.sampled_from([200_000, 10**6]))
+                    _get(doc, target[:-1])["positions"] = f"{' '.join(map(str, range(n)))} mm"
+                else:
+                    _get(doc, target[:-1])[target[-1]] = draw(
+                        st.sampled_from([10**6, 10**9, 2**62, -3])
+                    )
     try:
         return tomli_w.dumps(doc)
     except (TypeError, ValueError):  # e.g. a list mixing tables and values: write garbage

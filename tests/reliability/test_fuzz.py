@@ -48,3 +48,62 @@ def test_hostile_run_arguments_end_in_exit_2_or_an_honest_result(invoke, rotor, 
     kind = check_outcome(res.exit_code, res.stdout, res.stderr)
     if kind != "refused":
         assert "wrote" in res.stdout
+
+
+# ---------------------------------------------------------------------- the whole surface
+from fuzz_semantic import check_semantic, semantic_case  # noqa: E402
+from fuzz_surface import api_case, check_call, cli_case, condense_spec, ross_text  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def fe_files(tmp_path_factory):
+    pytest.importorskip("skfem")
+    from fuzz_surface import write_fe, write_results
+
+    d = tmp_path_factory.mktemp("fe")
+    write_fe(d)
+    write_results(d / "res")
+    return d
+
+
+def run_cli_case(invoke, case, files: dict[str, str], tmp_path):
+    """Invoke one :func:`fuzz_surface.cli_case` with its files; the result."""
+    _, args, env = case
+    argv = [a.format(tmp=tmp_path, **files) for a in args]
+    return invoke(*argv, env=env)
+
+
+@settings(FUZZ, max_examples=40)
+@given(case=cli_case(), spec=condense_spec(), ross=ross_text())
+def test_every_subcommand_and_the_environment_keep_the_contract(
+    invoke, rotor, tmp_path, fe_files, case, spec, ross
+):
+    """frf, modes, campbell, critical-map, sweep --vary, condense specs, import-ross files,
+    draw, report of hostile result directories and RHEOLIN_* variables: exit 2 naming the
+    field, or an honest result."""
+    (tmp_path / "file").write_text("not a directory")
+    spec_path = fe_files / f"spec_{abs(hash(spec)) % 10**8}.toml"
+    spec_path.write_text(spec)
+    (tmp_path / "r.toml").write_text(ross)
+    files = {"model": str(rotor), "spec": str(spec_path), "ross": str(tmp_path / "r.toml"),
+             "res": str(fe_files / "res")}  # fmt: skip
+    res = run_cli_case(invoke, case, files, tmp_path)
+    check_outcome(res.exit_code, res.stdout, res.stderr)
+
+
+@settings(FUZZ, max_examples=60)
+@given(case=api_case())
+def test_python_entry_points_refuse_bad_arguments_by_name(case):
+    """``rl.solve``, ``rl.floquet`` and ``Model.add_*`` with hostile arguments: a result,
+    or a ValueError/TypeError naming the argument; nothing else."""
+    _, call, names = case
+    check_call(call, names)
+
+
+@settings(FUZZ, max_examples=40)
+@given(case=semantic_case())
+def test_duplicates_add_or_are_refused_as_the_format_says(case):
+    """Semantic mutations (docs/model-format.md, duplicates and impossible physics): an
+    entry that adds changes the matrices by exactly its own contribution; one that may not
+    repeat, or cannot exist, is refused naming its field."""
+    check_semantic(case)

@@ -203,8 +203,8 @@ def test_free_rotation_of_a_gear_pair_on_stiff_supports_with_light_hubs(support:
 
     z1, z2, mod = 20, 50, 0.004
     m = Model()
-    m.add_rigid_body("p", (0, 0, 0), 1e-6, (1e-9, 1e-9, 2e-3))
-    m.add_rigid_body("g", (mod * (z1 + z2) / 2, 0, 0), 1e-6, (1e-9, 1e-9, 0.05))
+    m.add_rigid_body("p", (0, 0, 0), 1e-6, (1e-3, 1e-3, 2e-3))  # thin disks
+    m.add_rigid_body("g", (mod * (z1 + z2) / 2, 0, 0), 1e-6, (0.025, 0.025, 0.05))
     for body in ("p", "g"):
         m.add_bearing(f"{body}_b", body, 0, stiffness=support,
                       components=["ux", "uy", "uz", "phix", "phiy"])  # fmt: skip
@@ -215,3 +215,54 @@ def test_free_rotation_of_a_gear_pair_on_stiff_supports_with_light_hubs(support:
     r = rigid.modes[:, 0]
     phi_p, phi_g = r[a.dofs("p", 0)[5]], r[a.dofs("g", 0)[5]]
     assert phi_g / phi_p == pytest.approx(-z1 / z2, rel=1e-9)
+
+
+def _shaft_without(lateral: bool) -> rl.Model:
+    """A steel shaft with a disk, on bearings that hold its axial and torsional motion only
+    (``lateral=False``) or its lateral motion only (``lateral=True``)."""
+    from rheolin.mechanics.model import Model
+
+    m = Model()
+    m.add_shaft("rotor", [0.0, 0.25, 0.5], outer_diameter=0.04, material="steel")
+    m.add_disk("rotor", 1, mass=8.0, inertia=(0.05, 0.05, 0.1), unbalance=1e-4)
+    comps = ["ux", "uy"] if lateral else ["uz", "phiz"]
+    for node in (0, 2):
+        m.add_bearing(f"b{node}", "rotor", node, stiffness=[1e7, 1e7], components=comps)
+    return m
+
+
+def test_a_shaft_nothing_holds_laterally_is_refused_naming_it_and_the_direction() -> None:
+    """No steady state: refused by the solve and by the stability check, naming the body
+    and its lateral (and tilting) motion; never held as a rigid-body mode."""
+    from rheolin.system.rigid_modes import FreeBodyError
+
+    system = _shaft_without(lateral=False).assemble(300.0).system
+    with pytest.raises(FreeBodyError, match=r"body 'rotor' moves laterally and tilts \(ux, uy"):
+        rl.solve(system, 2, stability=False)
+    with pytest.raises(FreeBodyError, match="body 'rotor'"):
+        rl.floquet(system)
+
+
+def test_a_shaft_held_laterally_has_its_axial_and_torsional_motion_held() -> None:
+    """The same shaft on lateral bearings only: its axial and torsional rigid motions are a
+    drive train's, held; the lateral unbalance response is that of the supported shaft (the
+    held motions do not couple into it: the lateral response with a stiff axial/torsional
+    support added instead is the same)."""
+    free = _shaft_without(lateral=True)
+    held = _shaft_without(lateral=True)
+    held.add_bearing("thrust", "rotor", 0, stiffness=[1e12, 1e12], components=["uz", "phiz"])
+    W = 300.0
+    a, b = free.assemble(W), held.assemble(W)
+    s1, s2 = rl.solve(a.system, 2, stability=False), rl.solve(b.system, 2, stability=False)
+    assert s1.success and s1.info["rigid_modes"] == 2, s1.message
+    lat = [i for i, (_, _, c) in enumerate(a.dof_labels) if c in ("ux", "uy")]
+    q1, q2 = s1.harmonic(1)[lat], s2.harmonic(1)[lat]
+    assert np.allclose(q1, q2, rtol=1e-8, atol=1e-8 * np.abs(q2).max())
+
+
+def test_a_system_built_by_hand_is_held_as_given() -> None:
+    """Without the model's bodies (``system.motions`` is None) a rigid mode cannot be named:
+    it is held, as docs/solvers.md says (the free-free chain above)."""
+    s = _two_inertia()
+    assert s.motions is None
+    assert rl.solve(s, 3).info["rigid_modes"] == 1

@@ -37,7 +37,10 @@ def test_run_report_states_the_verdict_and_the_operating_point(pair):
     text = (pair / "out" / "report.html").read_text(encoding="utf-8")
     s = json.loads((pair / "out" / "summary.json").read_text())
     assert f"Operating point at {s['speed_rpm']:.6g} rpm" in text
-    assert ">stable<" in text and "backward error" in text
+    # the verdict the files hold: this example's least damped motions (torsion of the shaft
+    # ends, 22 kHz) are undamped, so its largest real part is round-off of either sign
+    assert s["stability"] in ("stable", "undecided") and "backward error" in text
+    assert f">{s['stability']}<" in text
     for name, b in s["operating_point"]["bearings"].items():
         assert f"bearing {name}</td><td>{b['load_N']:.4g} N" in text
     assert "Preloaded operating point" in text and 'class="drawing"' in text

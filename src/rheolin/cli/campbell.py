@@ -80,7 +80,7 @@ def campbell(
             from ..report import write_report
 
             write_report(stage, model=model, where=str(out_dir))
-    set_kept(None)
+    set_kept(f"the files in {out_dir} are complete")
     written = [out_dir / "campbell.nc", out_dir / "campbell.png"]
     if report:
         written.append(out_dir / "report.html")
@@ -141,8 +141,15 @@ def _stability_map(model: Any, speeds: np.ndarray, flag: bool | None) -> tuple[A
             f"the {kind} Hill problem needs an estimated {format_bytes(estimate)}, more than "
             f"the memory budget of {format_bytes(memory_budget())}"
         )
+    from ..system.rigid_modes import FreeBodyError
+
     with counted("Floquet stability", len(speeds), "speeds") as step:
-        smap = map_fn(model, speeds, refine=MAP_PRECISION, progress=lambda i, r: step(i + 1))
+        try:
+            smap = map_fn(model, speeds, refine=MAP_PRECISION, progress=lambda i, r: step(i + 1))
+        except FreeBodyError as exc:  # a free body has modes, but no operating point
+            if flag:
+                raise
+            return None, str(exc)
     return smap, ""
 
 

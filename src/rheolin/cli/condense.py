@@ -26,7 +26,6 @@ sphere) tied to rheolin nodes, and how many fixed-interface modes to keep::
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -43,6 +42,16 @@ __all__ = ["condense_command", "register"]
 SPEC = typer.Argument(..., help="Condensation spec (TOML; see docs/large-models.md).")
 OUT = typer.Option(..., "--out", "-o", help="The condensed body (.npz), written atomically.")
 FORMATS = ("abaqus", "matrix-market")
+#: The arguments of :func:`rheolin.fe.condense` and the spec fields that give them.
+SPEC_FIELDS = {
+    "`M`": "fe.mass",
+    "`K`": "fe.stiffness",
+    "`D`": "fe.damping",
+    "`interface`": "interface",
+    "`fixed`": "condense.fixed",
+    "`modes`": "condense.modes",
+    "`cutoff_hz`": "condense.cutoff",
+}
 
 
 def _length(value: Any, where: str) -> float:
@@ -100,16 +109,35 @@ def read_fe(spec: dict[str, Any], base: Path) -> Any:
         import scipy.io as sio
 
         nodes = _file(base, fe.get("nodes"), "fe.nodes")
-        xyz = np.loadtxt(nodes, delimiter=",", ndmin=2)
+        try:
+            xyz = np.loadtxt(nodes, delimiter=",", ndmin=2)
+        except (ValueError, OSError, UnicodeDecodeError) as exc:
+            raise ModelError(f"fe.nodes: cannot read a CSV of x, y, z per node ({exc})") from None
         if xyz.shape[1] != 3:
             raise ModelError("fe.nodes: expected a CSV of x, y, z per node (translations 3i+c)")
-        K, M = (sio.mmread(p) for p in (stiffness, mass))
-        D = sio.mmread(damping) if damping is not None else None
-        return FEModel.solid(K, M, xyz, D=D)
+
+        def read(path: Path, key: str) -> Any:
+            try:
+                return sio.mmread(path)
+            except (ValueError, OSError, UnicodeDecodeError, IndexError, TypeError) as exc:
+                raise ModelError(f"fe.{key}: cannot read a Matrix Market file ({exc})") from None
+
+        K, M = read(stiffness, "stiffness"), read(mass, "mass")
+        D = read(damping, "damping") if damping is not None else None
+        try:
+            return FEModel.solid(K, M, xyz, D=D)
+        except ModelError as exc:
+            raise ModelError(f"fe: {exc}") from None
     nodes_path = _file(base, fe.get("nodes"), "fe.nodes") if "nodes" in fe else None
-    return read_abaqus(
-        stiffness, mass, nodes=nodes_path, damping=damping, units=fe.get("units", "SI")
-    )
+    units = fe.get("units", "SI")
+    if not isinstance(units, str):
+        raise ModelError(f"fe.units: expected a unit system, e.g. 'mm-t-s' or 'SI', got {units!r}")
+    try:
+        return read_abaqus(stiffness, mass, nodes=nodes_path, damping=damping, units=units)
+    except ModelError as exc:
+        raise ModelError(f"fe: {exc}") from None
+    except (ValueError, OSError, UnicodeDecodeError, IndexError) as exc:
+        raise ModelError(f"fe: cannot read the Abaqus export ({exc})") from None
 
 
 def _select(fe: Any, table: dict[str, Any], where: str) -> np.ndarray:
@@ -145,13 +173,13 @@ def _select(fe: Any, table: dict[str, Any], where: str) -> np.ndarray:
 def condense_spec(spec_path: Path) -> Any:
     """The :class:`~rheolin.fe.CondensedFE` a spec file describes."""
     from ..fe import Coupling, condense
+    from ..io.loader import read_toml
 
     try:
-        spec = tomllib.loads(spec_path.read_text())
+        raw = spec_path.read_bytes()
     except OSError as exc:
         raise ModelError(f"{spec_path}: cannot read ({exc.strerror})") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ModelError(f"{spec_path}: not valid TOML ({exc})") from None
+    spec = read_toml(raw, str(spec_path))
     _unknown(spec, {"fe", "condense", "interface"}, "spec")
     base = spec_path.parent
     fe = read_fe(spec, base)
@@ -166,6 +194,10 @@ def condense_spec(spec_path: Path) -> Any:
             cutoff = to_si(c["cutoff"], "frequency") / (2 * np.pi)
         except UnitError as exc:
             raise ModelError(f"condense.cutoff: {exc}") from None
+        if not (np.isfinite(cutoff) and cutoff > 0):
+            raise ModelError(
+                f"condense.cutoff: must be a frequency > 0 (e.g. '2 kHz'), got {c['cutoff']!r}"
+            )
     axis = None
     if "spin_axis" in c:
         a = np.asarray(c["spin_axis"], dtype=float) if isinstance(c["spin_axis"], list) else None
@@ -182,6 +214,7 @@ def condense_spec(spec_path: Path) -> Any:
     if not isinstance(sets, list) or not sets:
         raise ModelError("interface: give at least one [[interface]] (the body's rheolin nodes)")
     couplings = []
+    seen: dict[str, int] = {}
     for i, t in enumerate(sets):
         where = f"interface[{i}]"
         if not isinstance(t, dict):
@@ -190,14 +223,28 @@ def condense_spec(spec_path: Path) -> Any:
         name = t.get("name")
         if not isinstance(name, str) or not name:
             raise ModelError(f"{where}.name: required")
+        if name in seen:
+            raise ModelError(
+                f"{where}.name: {name!r} is already the name of interface[{seen[name]}]; each "
+                "interface is one rheolin node and needs its own name"
+            )
+        seen[name] = i
         kind = t.get("kind", "average")
         if kind not in ("average", "rigid"):
             raise ModelError(f"{where}.kind: must be average or rigid, got {kind!r}")
         ref = _point(t.get("reference"), f"{where}.reference")
         couplings.append(Coupling(name, _select(fe, t, where), ref, kind=kind))
-    return condense(
-        fe, None, couplings, modes=modes, cutoff_hz=cutoff, spin_axis=axis, fixed=fixed
-    ), fe
+    try:
+        body = condense(
+            fe, None, couplings, modes=modes, cutoff_hz=cutoff, spin_axis=axis, fixed=fixed
+        )
+    except ModelError as exc:  # the library names its arguments; the spec names its fields
+        text = str(exc)
+        for arg, key in SPEC_FIELDS.items():
+            if text.startswith(arg):
+                raise ModelError(key + text[len(arg) :]) from None
+        raise ModelError(f"fe: {text}") from None
+    return body, fe
 
 
 def condense_command(spec: Path = SPEC, out: Path = OUT) -> None:

@@ -77,7 +77,7 @@ def critical_map(
     with sigterm_as_interrupt(), staged_output(out_dir, MAP_FILES) as stage:
         write_dataset(result.to_dataset(), stage / "critical_map.nc")
         plot_critical_map(result, stage / "critical_map.png")
-    set_kept(None)
+    set_kept(f"the files in {out_dir} are complete")
     table = Table(title=f"undamped critical speeds of {escape(model.name)} (its own bearings)")
     table.add_column("critical speed", justify="right")
     table.add_column("rpm", justify="right")

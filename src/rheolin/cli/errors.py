@@ -6,7 +6,9 @@
 * an internal error (a bug) prints one short line and exits with :data:`EXIT_INTERNAL` (3);
   ``rheolin --debug ...`` (or ``RHEOLIN_DEBUG=1``) adds the traceback;
 * Ctrl-C (or SIGTERM) stops the command, says what was kept and exits with
-  :data:`EXIT_INTERRUPTED` (130).
+  :data:`EXIT_INTERRUPTED` (130);
+* a closed standard output (``rheolin ... | head``) ends the command quietly with
+  :data:`EXIT_FAILED` (1), as Python's documentation advises for a broken pipe.
 
 The contract lives in :class:`ContractGroup` (the click group behind ``rheolin``), so it holds
 for ``python -m rheolin.cli``, the ``rheolin`` script and ``typer.testing.CliRunner`` alike.
@@ -14,11 +16,13 @@ for ``python -m rheolin.cli``, the ``rheolin`` script and ``typer.testing.CliRun
 
 from __future__ import annotations
 
+import _thread
 import contextlib
 import os
 import re
 import signal
 import sys
+import threading
 import traceback
 from collections.abc import Iterator
 from typing import Any, NoReturn
@@ -32,7 +36,7 @@ try:  # typer >= 0.2x carries its own copy of click
 except ImportError:  # pragma: no cover - typer on the click package
     from click.exceptions import NoArgsIsHelpError, UsageError  # type: ignore[assignment]
 
-from ..budget import MemoryBudgetError
+from ..budget import MemoryBudgetError, check_settings, format_bytes, process_headroom
 from ..errors import ModelError
 from ..io.units import UnitError
 
@@ -63,7 +67,7 @@ EXIT_INTERRUPTED = 130
 #: no highlighting; user text is printed with ``markup=False`` (see :func:`plain_error`).
 err = Console(stderr=True, emoji=False, highlight=False)
 
-_STATE: dict[str, Any] = {"debug": False, "kept": None}
+_STATE: dict[str, Any] = {"debug": False, "kept": None, "running": False}
 
 
 class UserError(Exception):
@@ -140,6 +144,28 @@ def _internal(exc: BaseException) -> None:
     )
 
 
+def _quiet_stdout() -> None:
+    """Point stdout at /dev/null, so that flushing it at exit does not fail again (the
+    Python documentation's advice for SIGPIPE)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # a stdout without a file (CliRunner)
+        pass
+
+
+def _out_of_memory(exc: BaseException) -> None:
+    """An allocation failed although the estimate fit: say so, with the limits that apply,
+    and what to lower (the input is too large for this process, not a bug)."""
+    room = ", ".join(f"{k} {format_bytes(v)}" for k, v in process_headroom().items())
+    plain_error(
+        "memory: the computation ran out of memory although its estimate fit the budget "
+        f"({type(exc).__name__}{': ' + str(exc) if str(exc) else ''}); room now: "
+        f"{room or 'unknown'}. Lower RHEOLIN_SOLVE_MEMORY / RHEOLIN_MEMORY_BUDGET, the "
+        "harmonic order or the model size"
+    )
+
+
 @contextlib.contextmanager
 def sigterm_as_interrupt() -> Iterator[None]:
     """SIGTERM (a batch system's stop) ends the command like Ctrl-C."""
@@ -163,11 +189,42 @@ def exit_with(code: int) -> NoReturn:
     raise typer.Exit(code)
 
 
+def _redelivering(previous: Any) -> Any:
+    """An unraisable-exception hook that gives a Ctrl-C back to the command: one landing in a
+    finalizer or weakref callback is printed and dropped by Python (the command would go on
+    and print a traceback); it is raised again in the main thread once the callback returns."""
+
+    def again() -> None:
+        if _STATE.get("running"):
+            _thread.interrupt_main()
+
+    def hook(unraisable: Any) -> None:
+        if unraisable.exc_type is not None and issubclass(unraisable.exc_type, KeyboardInterrupt):
+            threading.Timer(0.1, again).start()  # after the callback has returned
+            return
+        previous(unraisable)
+
+    return hook
+
+
 class ContractGroup(TyperGroup):
     """The ``rheolin`` command group with the error contract of this module."""
 
     def invoke(self, ctx: Any) -> Any:
+        previous = sys.unraisablehook
+        hook = sys.unraisablehook = _redelivering(previous)
+        _STATE["running"] = True
         try:
+            return self._invoke(ctx)
+        finally:
+            _STATE["running"] = False
+            if sys.unraisablehook is hook:  # not replaced on the way out (_interrupted)
+                sys.unraisablehook = previous
+
+    def _invoke(self, ctx: Any) -> Any:
+        try:
+            set_kept(None)  # an earlier command's files (in-process callers) are not this one's
+            check_settings()  # the budget variables, before any work
             return super().invoke(ctx)
         except typer.Exit:
             raise
@@ -177,11 +234,20 @@ class ContractGroup(TyperGroup):
             where = exc.ctx.command_path if exc.ctx is not None else "rheolin"
             plain_error(f"{where}: {exc.format_message()} (see `{where} --help`)")
             exit_with(EXIT_INPUT)
+        except BrokenPipeError:  # the reader of stdout went away (`rheolin ... | head`)
+            _quiet_stdout()
+            exit_with(EXIT_FAILED)
         except (KeyboardInterrupt, typer.Abort):
             _interrupted()
             exit_with(EXIT_INTERRUPTED)
         except USER_ERRORS as exc:
             plain_error(str(exc))
+            exit_with(EXIT_INPUT)
+        except MemoryError as exc:
+            _out_of_memory(exc)
+            exit_with(EXIT_INPUT)
+        except RecursionError as exc:  # input nested deeper than any model file needs
+            plain_error(f"input: nested too deeply to read ({exc})")
             exit_with(EXIT_INPUT)
         except Exception as exc:
             _internal(exc)

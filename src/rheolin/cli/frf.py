@@ -55,7 +55,8 @@ def frf(
 ) -> None:
     """Frequency response at a fixed speed (non-synchronous excitation): DIR/frf.nc and
     DIR/bode.png; the resonance peaks printed with their half-power amplification factors."""
-    from ..budget import format_bytes, memory_budget
+    from ..budget import MemoryBudgetError, format_bytes, memory_budget
+    from ..errors import ModelError
     from ..floquet import floquet, floquet_memory
     from ..io.outdir import staged_output
     from ..plots.frf import plot_bode
@@ -80,16 +81,22 @@ def frf(
     set_kept(f"nothing written; {out_dir} is unchanged")
     with sigterm_as_interrupt():
         with counted("frequency response", w.size, "frequencies") as step:
-            res = frequency_response(
-                lm.model,
-                w_speed,
-                w,
-                inputs,
-                outputs or None,
-                order=order,
-                unbalance=unbalance,
-                progress=step,
-            )
+            try:
+                res = frequency_response(
+                    lm.model,
+                    w_speed,
+                    w,
+                    inputs,
+                    outputs or None,
+                    order=order,
+                    unbalance=unbalance,
+                    progress=step,
+                )
+            except (ModelError, MemoryBudgetError) as exc:  # the lattice's size, before it is built
+                text = str(exc)
+                if text.startswith("order: "):
+                    raise type(exc)("--order: " + text.removeprefix("order: ")) from None
+                raise
         verdict, why = None, ""
         if flag is not False:
             kind, estimate = floquet_memory(assembled.system)
@@ -114,7 +121,7 @@ def frf(
             ds.attrs["max_floquet_real"] = float(verdict.max_real)
         write_dataset(ds, stage / "frf.nc")
         plot_bode(res, stage / "bode.png")
-    set_kept(None)
+    set_kept(f"the files in {out_dir} are complete")
     unit = "m/(kg m)" if unbalance else "m/N"
     rpm = w_speed * 30 / np.pi
     table = Table(title=f"resonance peaks of {escape(model.name)} at {rpm:.0f} rpm")
@@ -128,6 +135,8 @@ def frf(
             if not np.any(np.isfinite(mag)) or np.nanmax(mag) == 0:
                 continue
             top = float(np.nanmax(mag))
+            if w.size < 3:  # a peak needs a frequency on each side
+                continue
             for p in amplification_factors(w, np.nan_to_num(mag)):
                 if p.amplitude < PEAK_SHARE * top:
                     continue  # a ripple of the curve, not a resonance of this pair

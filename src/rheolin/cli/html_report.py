@@ -93,6 +93,8 @@ def report(
         raise fail(f"DIRECTORY: {str(directory)!r} holds no result file ({', '.join(FILES)})")
     if model is not None and not model.is_file():
         raise fail(f"--model: {str(model)!r} is not a file")
+    if out is not None and out.is_dir():
+        raise fail(f"--out: {str(out)!r} is a directory; give an HTML file name")
     write_report_for(directory, model, parse_operating(operating), nodes, out)
 
 

@@ -93,7 +93,7 @@ def modes(
     with sigterm_as_interrupt(), staged_output(out_dir, MODES_FILES) as stage:
         write_dataset(ds, stage / "modes.nc")
         plot_mode_shapes(m, W, stage / "modes.png", n_modes=count)
-    set_kept(None)
+    set_kept(f"the files in {out_dir} are complete")
     table = Table(title=f"modes of {escape(model.name)} at {float(w) * 30 / np.pi:.0f} rpm")
     for col in ("mode", "frequency (Hz)", "damping ratio", "kind"):
         table.add_column(col, justify="left" if col == "kind" else "right")

@@ -91,6 +91,9 @@ def run(
     summary["warnings"] = notes.messages
     if lm.model.preloaded:  # solved about it: the static equilibrium (cached)
         summary["operating_point"] = lm.model.operating_point(w).to_dict()
+        for note in summary["operating_point"]["notes"]:  # a torque the drive takes
+            if note not in notes.messages:
+                notes.messages.append(note)
     verdict = point_verdict(summary)
     with sigterm_as_interrupt(), staged_output(out_dir, RUN_FILES) as stage:
         write_dataset(ds, stage / "results.nc")
@@ -105,7 +108,7 @@ def run(
 
             written.append(write_report(stage, model=model, where=str(out_dir)))
     written = [out_dir / p.name for p in written]
-    set_kept(None)
+    set_kept(f"the files in {out_dir} are complete")
     if as_json:
         sys.stdout.write(json.dumps(summary, indent=2) + "\n")
     else:

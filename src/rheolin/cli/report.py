@@ -156,12 +156,8 @@ def print_operating_point(console: Console, op: dict[str, Any]) -> None:
                       f"{m['stiffness_N_per_m']:.4g}",
                       f"{m['stiffness_N_per_m'] / m['nominal_N_per_m']:.3g}")  # fmt: skip
         console.print(t)
-    if any(abs(x) > 0 for x in op.get("rigid_load", [])):
-        console.print(
-            "[yellow]unbalanced torques[/yellow]: the constant-speed constraint holds "
-            + ", ".join(f"{x:.3g}" for x in op["rigid_load"])
-            + " (R^T f); declare the output torque as 'reaction' to balance them"
-        )
+    for note in op.get("notes", []):
+        console.print(f"[yellow]warning:[/yellow] {escape(note)}")
 
 
 def _norm(v: Any) -> float:

@@ -5,10 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
-from rich.console import Console
-from rich.markup import escape
 
-from ..errors import ModelError
+from .common import fail
 
 __all__ = ["import_ross", "register"]
 
@@ -23,13 +21,10 @@ def import_ross(rotor: Path = ROTOR, out: Path | None = OUT) -> None:
     """Convert a ROSS rotor file to a rheolin model file (ROSS itself is not needed)."""
     from ..io.ross import model_from_ross
 
-    try:
-        text = model_from_ross(rotor).to_toml(out)
-    except ModelError as exc:
-        Console(stderr=True).print(
-            f"[red]error:[/red] {escape(str(exc))}", highlight=False, soft_wrap=True
-        )
-        raise typer.Exit(2) from None
+    if out is not None and (out.is_dir() or not out.parent.is_dir()):
+        what = "is a directory" if out.is_dir() else f"has no directory {str(out.parent)!r}"
+        raise fail(f"--out: {str(out)!r} {what}; give a file path for the model file")
+    text = model_from_ross(rotor).to_toml(out)  # a ModelError names the element and field
     if out is None:
         typer.echo(text, nl=False)
 

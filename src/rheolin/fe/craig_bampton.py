@@ -198,8 +198,25 @@ def condense(
     fe = _as_fe(K, M, D, coordinates)
     if not interface:
         raise ModelError("`interface`: give at least one Coupling (the body's rheolin nodes)")
+    names = [c.name for c in interface]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise ModelError(
+            f"`interface`: the names {twice} are used more than once; each interface is one "
+            "rheolin node and needs its own name"
+        )
     if isinstance(modes, bool) or int(modes) < 0:
         raise ModelError(f"`modes` must be a nonnegative integer, got {modes!r}")
+    if cutoff_hz is not None and not (np.isfinite(cutoff_hz) and cutoff_hz > 0):
+        raise ModelError(f"`cutoff_hz` must be a finite frequency > 0 [Hz], got {cutoff_hz!r}")
+    for what, X in (("M", fe.M), ("K", fe.K)):
+        low = float(np.min(X.diagonal(), initial=0.0))
+        if low < 0:
+            i = int(np.argmin(X.diagonal()))
+            raise ModelError(
+                f"`{what}`: the {'mass' if what == 'M' else 'stiffness'} matrix has a negative "
+                f"diagonal entry {low:.4g} at FE DOF {i}; it must be positive semidefinite"
+            )
     T, free = coupling_transform(fe, interface)
     nb = 6 * len(interface)
     if fixed is not None:
@@ -234,7 +251,13 @@ def condense(
             "`interface`: the inner DOFs can move freely with the interface fixed (a part of "
             "the mesh is not connected to any interface, or the model is a mechanism)"
         )
-    lam, Phi = _fixed_interface_modes(Kii, Mii, factor, int(modes), cutoff_hz)
+    try:
+        lam, Phi = _fixed_interface_modes(Kii, Mii, factor, int(modes), cutoff_hz)
+    except (np.linalg.LinAlgError, spla.ArpackError, spla.ArpackNoConvergence) as exc:
+        raise ModelError(
+            "`M`: the fixed-interface eigenproblem failed: the mass matrix is not positive "
+            f"definite on the body's inner DOFs, or the stiffness is singular there ({exc})"
+        ) from None
     Y = sp.csr_array(Tc @ _basis(nb, Psi, Phi))
     red = {name: _reduce(mat, Y) for name, mat in (("K", fe.K), ("M", fe.M))}
     Dr = None if fe.D is None else _reduce(fe.D, Y)

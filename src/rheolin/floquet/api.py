@@ -16,7 +16,7 @@ from ..budget import memory_budget as resolve_budget
 from ..harmonics.lattice import Lattice, harmonic_lattice, system_lattice
 from ..harmonics.sets import HarmonicSet, as_harmonic_set
 from ..system.periodic import PeriodicSystem
-from ..system.rigid_modes import find_rigid_modes
+from ..system.rigid_modes import held_rigid_modes as find_rigid_modes
 from . import large
 from .band import BandAveraged, band_memory
 from .confirm import confirm_unresolved
@@ -57,6 +57,33 @@ DEFAULT_LATTICE_ORDER = 1
 
 #: Highest order ``floquet(system)`` raises the lattice to by itself.
 MAX_AUTO_ORDER = 3
+
+
+#: The largest dense Hill truncation ``N`` (``-N..N``) accepted before its size is even
+#: estimated: ``(2N + 1) n`` unknowns in a dense eigenproblem.
+MAX_DENSE_HARMONICS = 10**5
+
+
+def _check_counts(system: PeriodicSystem, harmonics: Any, **counts: Any) -> None:
+    """Refuse, by name, counts that are not positive integers and a harmonic set whose
+    size alone rules out a Hill eigenproblem (before it is built)."""
+    for name, value in counts.items():
+        if value is None and name == "order":
+            continue
+        low = 0 if name == "order" else 1
+        if not isinstance(value, int | np.integer) or isinstance(value, bool) or value < low:
+            raise ValueError(f"`{name}` must be an integer >= {low}, got {value!r:.80}")
+    size: int | None = None
+    if isinstance(harmonics, int | np.integer) and not isinstance(harmonics, bool):
+        size = 2 * int(harmonics) + 1
+    elif harmonics is not None and hasattr(harmonics, "__len__"):
+        size = len(harmonics)
+    if size is not None and size > 2 * MAX_DENSE_HARMONICS + 1:
+        raise MemoryBudgetError(
+            f"`harmonics`: {size:,} harmonics x {system.n} DOFs for a Hill eigenproblem: far "
+            f"beyond any memory (at most {2 * MAX_DENSE_HARMONICS + 1:,} are considered); "
+            "use the lattice method (method='lattice'), which needs a few"
+        )
 
 
 def floquet(
@@ -148,8 +175,9 @@ def floquet(
     ('lattice', True, True)
     """
     allowed = ("auto", "dense", "sparse", "lattice")
-    if method not in allowed:
-        raise ValueError(f"`method` must be one of {list(allowed)}, got {method!r}")
+    if not isinstance(method, str) or method not in allowed:
+        raise ValueError(f"`method` must be one of {list(allowed)}, got {method!r:.80}")
+    _check_counts(system, harmonics, k=k, order=order, max_shifts=max_shifts)
     if band is not None and (isinstance(band, bool) or int(band) < 2):
         raise ValueError(f"`band` must be an integer >= 2 (modes), got {band!r}")
     rotated: list[str] = []

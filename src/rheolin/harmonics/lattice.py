@@ -121,6 +121,10 @@ def combination_text(coefficients: Sequence[int] | np.ndarray, labels: Sequence[
     return text[2:] if text.startswith("+ ") else "-" + text[2:]
 
 
+#: Sizes beyond this are reported as this (no lattice gets near it).
+_SIZE_CAP = float(2**62)
+
+
 def lattice_size_bound(costs: Sequence[int], order: int) -> int:
     """Number of integer vectors ``a`` with ``sum_j costs_j |a_j| <= order``.
 
@@ -133,14 +137,20 @@ def lattice_size_bound(costs: Sequence[int], order: int) -> int:
     7
     """
     p = int(order)
-    poly = np.zeros(p + 1, dtype=object)
-    poly[0] = 1
+    # the generating function prod_j (1 + x^c) / (1 - x^c), truncated at x^p: per generator
+    # a running sum (1 / (1 - x^c)) and a shifted add (1 + x^c), O(p) each; in floats
+    # (exact below 2^53), capped far above any size a lattice may have
+    poly = np.zeros(p + 1)
+    poly[0] = 1.0
     for c in costs:
-        factor = np.zeros(p + 1, dtype=object)
-        factor[0] = 1
-        factor[int(c) :: int(c)] = 2
-        poly = np.convolve(poly, factor)[: p + 1]
-    return int(sum(poly))
+        c = int(c)
+        if c > p:
+            continue
+        for start in range(c):  # b[i] = a[i] + b[i - c]
+            poly[start::c] = np.cumsum(poly[start::c])
+        poly[c:] = poly[c:] + poly[:-c].copy()
+        np.minimum(poly, _SIZE_CAP, out=poly)
+    return int(min(float(poly.sum()), _SIZE_CAP))
 
 
 def coupling_strengths(system: Any) -> dict[int, float]:

@@ -279,12 +279,17 @@ class _Builder:
 
     def _file_positions(self, path: str, b: CondensedBody) -> list[list[float]]:
         """Node positions stored in a condensed body's ``.npz`` (saved by ``condense``)."""
+        from ..mechanics.condensed import read_npz
+
         try:
-            with np.load(self._file(path, b)) as z:
-                if "positions" in z.files:
-                    return np.asarray(z["positions"], dtype=float).reshape(-1, 3).tolist()
-        except (OSError, ValueError) as exc:
-            raise ModelError(f"{path}.path: cannot read {b.path!r}: {exc}") from None
+            stored = read_npz(self._file(path, b))
+        except ModelError as exc:
+            raise ModelError(f"{path}.path: {str(exc).removeprefix('`path`: ')}") from None
+        if "positions" in stored:
+            pos = np.asarray(stored["positions"], dtype=float)
+            if pos.size == 0 or pos.size % 3:
+                raise ModelError(f"{path}.path: `positions` in {b.path!r} are not 3-vectors")
+            return pos.reshape(-1, 3).tolist()
         raise ModelError(f"{path}.positions: required (the file has no `positions`)")
 
     def _add_body(self, path: str, b: Any) -> None:
@@ -446,13 +451,14 @@ class _Builder:
                 f"{p}.stiffness: give `stiffness` (mean), or `contact_ratio`, "
                 "`single_stiffness` and `double_stiffness` (rectangular wave)"
             )
-        te = {
-            t.harmonic: (
-                t.amplitude * np.cos(t.phase) if t.harmonic == 0
+        te: dict[int, complex] = {}
+        for t in m.transmission_error:  # a sum of harmonics: entries at one harmonic add
+            e = (
+                t.amplitude * np.cos(t.phase)
+                if t.harmonic == 0
                 else t.amplitude / 2 * np.exp(1j * t.phase)
             )
-            for t in m.transmission_error
-        }  # fmt: skip
+            te[t.harmonic] = te.get(t.harmonic, 0.0) + e
         kw = m.model_dump(exclude={"name", "transmission_error", "stiffness"})
         self._call(
             p,

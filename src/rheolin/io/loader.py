@@ -20,7 +20,15 @@ from ..mechanics.model import Model
 from .build import build_model
 from .schema import ModelFile, field_path, table_class
 
-__all__ = ["LoadedModel", "load_model", "parse_document", "parse_model", "read_model"]
+__all__ = [
+    "LoadedModel",
+    "check_size",
+    "load_model",
+    "parse_document",
+    "parse_model",
+    "read_model",
+    "read_toml",
+]
 
 
 @dataclass
@@ -60,10 +68,7 @@ def parse_model(
     """Validate TOML text; see :func:`load_model`. Relative file paths in the model (condensed
     bodies) are taken from ``base`` (default: the working directory)."""
     data = raw.encode() if isinstance(raw, str) else raw
-    try:
-        doc = tomllib.loads(data.decode("utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ModelError(f"{source}: not valid TOML: {exc}") from None
+    doc = read_toml(data, source)
     return parse_document(doc, source, base, sha256=hashlib.sha256(data).hexdigest())
 
 
@@ -88,8 +93,68 @@ def parse_document(
         spec = ModelFile.model_validate(doc)
     except ValidationError as exc:
         raise ModelError(_format(exc, source)) from None
+    except RecursionError:
+        raise ModelError(f"{source}: a value is nested too deeply to check") from None
+    check_size(spec, source)
     model = build_model(spec, Path(base) if base is not None else Path.cwd())
     return LoadedModel(model, spec, sha256, source)
+
+
+#: Memory of one shaft element at the peak of its assembly (its Timoshenko matrices rotated
+#: into Fourier coefficients; about 54 kB measured by ``bench/fuzz.py``), with some room.
+ASSEMBLY_BYTES_PER_ELEMENT = 64_000
+
+
+def check_size(spec: ModelFile, source: str = "<document>") -> None:
+    """Refuse a model too large to assemble within the memory budget
+    (:func:`rheolin.budget.memory_budget`), from the element count of its shafts, before
+    anything is built: a :class:`~rheolin.budget.MemoryBudgetError` naming the largest shaft.
+
+    >>> import tomllib
+    >>> from rheolin.data import example_text
+    >>> check_size(ModelFile.model_validate(tomllib.loads(example_text("rotor"))))
+    """
+    from ..budget import MemoryBudgetError, format_bytes, memory_budget
+
+    counts = [
+        (f"shafts[{i}].positions", len(b.positions) - 1 + sum(len(x.elements) for x in b.layers))
+        for i, b in enumerate(spec.shafts)
+    ]
+    total = sum(c for _, c in counts)
+    need = total * ASSEMBLY_BYTES_PER_ELEMENT
+    if not counts or need <= (limit := memory_budget()):
+        return
+    where, largest = max(counts, key=lambda x: x[1])
+    raise MemoryBudgetError(
+        f"{where}: {total:,} shaft elements ({largest:,} on this shaft) need an estimated "
+        f"{format_bytes(need)} to assemble, more than the memory budget of "
+        f"{format_bytes(limit)}: use fewer nodes (a few per diameter step, disk and bearing "
+        "suffice for the modes below a few kHz) or raise RHEOLIN_MEMORY_BUDGET"
+    )
+
+
+def read_toml(data: bytes | str, source: str) -> dict[str, Any]:
+    """TOML text as a dict; a :class:`~rheolin.errors.ModelError` naming ``source`` when it
+    is not valid TOML, not UTF-8, or nested too deeply to read (arrays in arrays beyond
+    Python's recursion limit: no model file nests more than a few levels).
+
+    >>> read_toml("a = 1", "m.toml")
+    {'a': 1}
+    >>> read_toml("a = " + "[" * 5000 + "]" * 5000, "m.toml")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    rheolin.errors.ModelError: m.toml: not valid TOML: nested too deeply ...
+    """
+    try:
+        text = data.decode("utf-8") if isinstance(data, bytes) else data
+        return tomllib.loads(text)
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ModelError(f"{source}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise ModelError(
+            f"{source}: not valid TOML: nested too deeply (arrays or tables inside one another "
+            "beyond the reader's limit)"
+        ) from None
 
 
 # ---------------------------------------------------------------------- error messages

@@ -7,6 +7,8 @@ before it computes anything:
 * the model assembles at the operating speed (gear geometry, bearing frames, condensed
   matrices; each error names its field);
 * the time-averaged mass matrix has no negative direction (positive semidefinite);
+* no body is free in a direction that only a support can hold (a shaft without lateral
+  bearings has no steady state; a drive train's rotation and axial position are held);
 * the harmonic set that ``[harmonics]`` (or ``--harmonics``/``--max-order``) asks for, times
   the degrees of freedom, fits the memory budget: the closure is grown with a size limit and
   refused with the estimate (``MemoryBudgetError``) before it can exhaust the machine.
@@ -29,7 +31,7 @@ import numpy as np
 from ..budget import MemoryBudgetError, format_bytes, solve_budget
 from ..errors import ModelError
 
-__all__ = ["VECTORS_PER_HARMONIC", "Preflight", "preflight"]
+__all__ = ["VECTORS_PER_HARMONIC", "Preflight", "check_free_bodies", "preflight"]
 
 #: Complex vectors per harmonic and DOF that any solve holds at least (load, solution,
 #: residual and a few Krylov vectors): the floor of the memory estimate of a harmonic set.
@@ -65,12 +67,15 @@ def preflight(
     max_order: float | None = None,
     budget: int | None = None,
     needs_load: bool = True,
+    free_bodies: bool | None = None,
 ) -> Preflight:
     """Check a loaded model (:class:`~rheolin.io.LoadedModel`) at the first of ``speeds``
     (default: the file's ``model.speed``) with the harmonic settings ``order``/``max_order``
     (default: the file's); raise :class:`~rheolin.ModelError` or
     :class:`~rheolin.budget.MemoryBudgetError` naming the field. ``needs_load=False`` (a
-    Campbell diagram) accepts a model without loads."""
+    Campbell diagram) accepts a model without loads; ``free_bodies`` (default:
+    ``needs_load``) refuses a body that only a support could hold and nothing holds
+    (:func:`check_free_bodies`: a steady state needs it held)."""
     from ..harmonics.sets import HarmonicSet
 
     h = lm.spec.harmonics
@@ -80,8 +85,10 @@ def preflight(
     a = lm.model.assemble(float(speed) if speed else CHECK_SPEED)
     system = a.system
     _check_mass(system)
+    if needs_load if free_bodies is None else free_bodies:  # a Campbell diagram needs not
+        check_free_bodies(system)
     n = int(system.n)
-    per_harmonic = VECTORS_PER_HARMONIC * 16 * n
+    per_harmonic = _per_harmonic(system)
     limit = solve_budget() if budget is None else int(budget)
     max_size = max(limit // per_harmonic, 1)
     if not system.load_harmonics:
@@ -109,13 +116,41 @@ def preflight(
             + ("" if max_order is None else f" with max_order {max_order:g}")
             + f" grows the harmonic set past {max_size:,} harmonics, the most that fit the "
             f"memory budget of {format_bytes(limit)} with {n} DOF (a solve holds at least "
-            f"{VECTORS_PER_HARMONIC} complex vectors per harmonic: "
-            f"{format_bytes(per_harmonic)} each); lower `order` or set `max_order` "
+            f"{format_bytes(per_harmonic)} per harmonic: {VECTORS_PER_HARMONIC} complex "
+            "vectors and its share of the GMRES basis); lower `order` or set `max_order` "
             "(or raise RHEOLIN_SOLVE_MEMORY)"
         ) from None
     except ValueError as exc:
         raise ModelError(f"harmonics: {exc}") from None
     return Preflight(n, len(hset), len(hset) * per_harmonic)
+
+
+def _per_harmonic(system: Any) -> int:
+    """Bytes a solve holds per harmonic of the two-sided set, before any factor: at least
+    :data:`VECTORS_PER_HARMONIC` complex vectors, or the operator's own estimate of its
+    vectors and GMRES basis (:class:`~rheolin.linalg.memory.SolveMemory`, per harmonic
+    ``n >= 0``, two of which make about one of each sign)."""
+    from ..linalg.memory import SolveMemory
+
+    touched = np.zeros(system.n, bool)  # the support of the time variation
+    for name in ("M", "D", "K"):
+        for k, X in getattr(system, name).items():
+            if k:
+                touched[np.flatnonzero(np.abs(X).sum(axis=1))] = True
+    operator = SolveMemory(system.n, 2, int(touched.sum())).total // 2
+    return max(VECTORS_PER_HARMONIC * 16 * system.n, operator)
+
+
+def check_free_bodies(system: Any) -> None:
+    """No body has a rigid motion that nothing holds but the drive's spin and axial position
+    (:func:`~rheolin.system.rigid_modes.held_rigid_modes`; the search costs one dense
+    eigendecomposition, so models above its dense size are checked by the solve itself)."""
+    from ..system.rigid_modes import DENSE_LIMIT, held_rigid_modes
+
+    if system.constraint is not None:
+        system = system.constraint.reduce(system)
+    if system.n <= DENSE_LIMIT:
+        held_rigid_modes(system)
 
 
 def _check_mass(system: Any) -> None:

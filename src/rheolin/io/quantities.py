@@ -106,7 +106,11 @@ def vector(kind: str, sign: str = "") -> Callable[[Any], list[float]]:
             if not m:
                 return [one(value)]
             nums = [x for x in re.split(r"[,\s]+", m.group(1)) if x]
-            return [one(f"{x} {m.group(2)}") for x in nums]
+            try:  # the unit read once (units are linear): thousands of nodes stay fast
+                scale = to_si(f"1 {m.group(2)}", kind)
+                return [one(float(x) * scale) for x in nums]
+            except (UnitError, ValueError):  # say which entry, as written
+                return [one(f"{x} {m.group(2)}") for x in nums]
         if isinstance(value, list):
             out = []
             for i, x in enumerate(value):

@@ -100,6 +100,33 @@ def _kind(key: str) -> str:
     return key.split("_", 1)[0]
 
 
+def _num(v: Any, name: str, key: str, default: Any = None) -> float:
+    """``v[name]`` as a finite float (ROSS saves SI numbers), else a ModelError naming
+    ``key.name``; ``default`` when the field is missing (None: required)."""
+    x = v.get(name) if isinstance(v, dict) else None
+    if x is None:
+        if default is None:
+            raise ModelError(f"{key}.{name}: required (a number in SI units)")
+        x = default
+    if isinstance(x, bool) or not isinstance(x, int | float):
+        raise ModelError(
+            f"{key}.{name}: expected a number in SI units (ROSS saves plain numbers), got {x!r}"
+        )
+    if not np.isfinite(x):
+        raise ModelError(f"{key}.{name}: must be finite, got {x!r}")
+    return float(x)
+
+
+def _numbers(x: Any, where: str) -> np.ndarray:
+    """A number or a list of numbers as a 1-D float array, else a ModelError at ``where``."""
+    values = x if isinstance(x, list) else [x]
+    if not values or any(
+        isinstance(e, bool) or not isinstance(e, int | float) or not np.isfinite(e) for e in values
+    ):
+        raise ModelError(f"{where}: expected finite numbers in SI units, got {x!r}")
+    return np.asarray(values, dtype=float)
+
+
 def read_ross_document(doc: dict[str, Any]) -> Model:
     """A :class:`~rheolin.mechanics.Model` from a ROSS rotor file read into a dict."""
     items = {
@@ -114,6 +141,9 @@ def read_ross_document(doc: dict[str, Any]) -> Model:
             f"ROSS file: element classes {other} are not supported; supported: {list(known)} "
             "(save magnetic, ball or roller bearings as BearingElement coefficient tables)"
         )
+    for key, v in items.items():
+        if not isinstance(v, dict):
+            raise ModelError(f"{key}: expected a table of the element's arguments")
     shafts = [(k, v) for k, v in items.items() if _kind(k) == "ShaftElement"]
     if not shafts:
         raise ModelError("ROSS file: no ShaftElement; the rotor needs a shaft")
@@ -123,8 +153,9 @@ def read_ross_document(doc: dict[str, Any]) -> Model:
         if _kind(key) == "DiskElement":
             n = _int(v, "n", key)
             _check_node(n, len(positions), key)
-            Id, Ip = float(v["Id"]), float(v["Ip"])
-            model.add_disk("rotor", n, mass=float(v["m"]), inertia=np.diag([Id, Id, Ip]))
+            Id, Ip = _num(v, "Id", key), _num(v, "Ip", key)
+            _at(key, model.add_disk, "rotor", n, mass=_num(v, "m", key),
+                inertia=np.diag([Id, Id, Ip]))  # fmt: skip
     masses = {}
     for key, v in items.items():
         if _kind(key) == "PointMass":
@@ -141,6 +172,14 @@ def read_ross_document(doc: dict[str, Any]) -> Model:
         if _kind(key) in ("BearingElement", "SealElement"):
             _add_bearing(model, key, v, len(positions), point_nodes)
     return model
+
+
+def _at(key: str, fn: Any, *args: Any, **kw: Any) -> Any:
+    """``fn(*args, **kw)`` with a model error prefixed by the element's name."""
+    try:
+        return fn(*args, **kw)
+    except ModelError as exc:
+        raise ModelError(f"{key}: {exc}") from None
 
 
 def _int(v: dict[str, Any], name: str, key: str) -> int:
@@ -170,6 +209,15 @@ def _add_shaft(model: Model, shafts: list[tuple[str, dict[str, Any]]]) -> np.nda
     if nodes != list(range(len(nodes))):
         raise ModelError(f"ShaftElement.n: element numbers must be 0..N-1, got {nodes}")
     lengths = []
+    for key, v in shafts:
+        mat = v["material"]
+        for name in ("E", "G_s", "rho"):
+            _num(mat, name, f"{key}.material")
+        for name in ("L", "odl"):
+            _num(v, name, key)
+        for name in ("idl", "odr", "idr"):
+            if v.get(name) is not None:
+                _num(v, name, key)
     for n in nodes:
         Ls = {float(v["L"]) for _, v in groups[n]}
         if len(Ls) != 1:
@@ -179,9 +227,13 @@ def _add_shaft(model: Model, shafts: list[tuple[str, dict[str, Any]]]) -> np.nda
     first = [groups[n][0][1] for n in nodes]
 
     def col(name: str, vs: list[dict[str, Any]], default: str | None = None) -> list[float]:
-        return [float(v[name] if v.get(name) is not None else v[default or name]) for v in vs]
+        return [
+            float(v[name] if v.get(name) is not None else v.get(default or name) or 0.0) for v in vs
+        ]
 
-    model.add_shaft(
+    _at(
+        "ShaftElement",
+        model.add_shaft,
         "rotor",
         z.tolist(),
         outer_diameter=col("odl", first),
@@ -195,16 +247,21 @@ def _add_shaft(model: Model, shafts: list[tuple[str, dict[str, Any]]]) -> np.nda
     for n in nodes:
         for _, v in groups[n][1:]:
             mat = v["material"]
-            model.add_shaft_layer(
+            idl = float(v.get("idl") or 0.0)
+            _at(
+                key,
+                model.add_shaft_layer,
                 "rotor",
                 [n],
                 float(v["odl"]),
-                float(v["idl"]),
+                idl,
                 elastic_modulus=mat["E"],
                 shear_modulus=mat["G_s"],
                 density=mat["rho"],
                 outer_diameter_right=float(v["odl"] if v.get("odr") is None else v["odr"]),
-                inner_diameter_right=float(v["idl"] if v.get("idr") is None else v["idr"]),
+                inner_diameter_right=float(
+                    v.get("idl") or 0.0 if v.get("idr") is None else v["idr"]
+                ),
             )
     return z
 
@@ -221,7 +278,9 @@ def _add_point_mass(
     m = [v.get(c) for c in ("mx", "my", "mz")]
     if all(x is None for x in m):
         m = [v.get("m")] * 3
-    vals = [float(x) for x in m if x is not None]
+    vals = [_num(v, c, key) for c, x in zip(("mx", "my", "mz"), m, strict=True) if x is not None]
+    if all(v.get(c) is None for c in ("mx", "my", "mz")) and v.get("m") is not None:
+        vals = [_num(v, "m", key)] * 3
     if len(vals) != 3 or len(set(vals)) != 1 or vals[0] <= 0:
         raise ModelError(f"{key}: point masses need mx = my = mz > 0, got {m}")
     # position: that of the shaft node it hangs from (through the chain of links)
@@ -243,7 +302,7 @@ def _coefficient(v: dict[str, Any], name: str, n: int, key: str) -> np.ndarray:
     if x is None:
         diag = {"kyy": "kxx", "cyy": "cxx", "myy": "mxx"}
         x = v.get(diag[name], 0.0) if name in diag else 0.0
-    a = np.atleast_1d(np.asarray(x, dtype=float)).ravel()
+    a = _numbers(x, f"{key}.{name}").ravel()
     if a.size == 1:
         a = np.full(n, a[0])
     if a.size != n or not np.all(np.isfinite(a)):
@@ -256,7 +315,7 @@ def _add_bearing(
 ) -> None:
     n = _int(v, "n", key)
     freq = v.get("frequency")
-    speeds = None if freq is None else np.atleast_1d(np.asarray(freq, dtype=float)).ravel()
+    speeds = None if freq is None else _numbers(freq, f"{key}.frequency").ravel()
     ns = 1 if speeds is None else speeds.size
     tabs = []
     for c in _COEFFS:
@@ -284,12 +343,13 @@ def _add_bearing(
             raise ModelError(f"{key}.n_link: node {link} is neither a shaft node nor a point mass")
     comps = ("ux", "uy", "uz")
     if speeds is None or speeds.size == 1:
-        model.add_bearing(
-            key, body, node, tabs[0][0], tabs[1][0], comps, other_body, other_node, mass=tabs[2][0]
-        )
+        _at(key, model.add_bearing, key, body, node, tabs[0][0], tabs[1][0], comps, other_body,
+            other_node, mass=tabs[2][0])  # fmt: skip
         return
     order = np.argsort(speeds)
-    model.add_bearing(
+    _at(
+        key,
+        model.add_bearing,
         key,
         body,
         node,

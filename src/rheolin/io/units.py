@@ -84,7 +84,7 @@ def to_si(value: Any, kind: str) -> float:
     if isinstance(value, int | float):
         out = float(value)
     elif isinstance(value, str):
-        out = _parse(value, kind, unit, example)
+        out = _parse(value.strip(), kind, unit, example)
     else:
         raise UnitError(
             f"expected a number (SI) or a string like {example!r}, got {type(value).__name__}"
@@ -99,6 +99,7 @@ def to_si(value: Any, kind: str) -> float:
     return out
 
 
+@lru_cache(maxsize=4096)  # model files repeat their quantities ("7850 kg/m^3")
 def _parse(text: str, kind: str, unit: str, example: str) -> float:
     ureg = unit_registry()
     try:

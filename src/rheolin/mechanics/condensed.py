@@ -53,6 +53,49 @@ from .rotation import (
 __all__ = ["CondensedBody", "condensed_body", "load_condensed", "load_matrix"]
 
 
+#: Arrays of a condensed body's file that hold text (the interface names).
+_TEXT = {"interface"}
+
+
+def read_npz(path: str | Path) -> dict[str, np.ndarray]:
+    """The arrays of a ``.npz`` file, each numeric (no pickled objects, which NumPy would run
+    code to read), or a :class:`~rheolin.errors.ModelError` naming the file and the array.
+
+    >>> import tempfile, os
+    >>> p = os.path.join(tempfile.mkdtemp(), "b.npz")
+    >>> np.savez(p, M=np.eye(2), names=np.array([{"a": 1}], dtype=object))
+    >>> read_npz(p)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    rheolin.errors.ModelError: `path`: array 'names' in ... holds Python objects (pickled), ...
+    """
+    import zipfile
+
+    out: dict[str, np.ndarray] = {}
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            for k in z.files:
+                try:
+                    a = z[k]
+                except ValueError:
+                    raise ModelError(
+                        f"`path`: array {k!r} in {path!s} holds Python objects (pickled), not "
+                        "numbers; save numeric arrays only"
+                    ) from None
+                if a.dtype.kind not in "biufU" or (a.dtype.kind == "U" and k not in _TEXT):
+                    raise ModelError(
+                        f"`path`: array {k!r} in {path!s} is not numeric (dtype {a.dtype})"
+                    )
+                if a.dtype.kind == "f" and not np.all(np.isfinite(a)):
+                    raise ModelError(f"`path`: array {k!r} in {path!s} holds NaN or inf")
+                out[k] = a
+    except ModelError:
+        raise
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise ModelError(f"`path`: cannot read {str(path)!r} as a .npz file ({exc})") from None
+    return out
+
+
 def load_matrix(path: str | Path) -> np.ndarray:
     """Dense matrix from a Matrix Market (``.mtx``) or NumPy (``.npy``) file.
 
@@ -66,10 +109,15 @@ def load_matrix(path: str | Path) -> np.ndarray:
     if p.suffix == ".mtx" or p.name.endswith(".mtx.gz"):
         a = scipy.io.mmread(str(p))
     elif p.suffix == ".npy":
-        a = np.load(p)
+        try:
+            a = np.load(p, allow_pickle=False)
+        except (OSError, ValueError, EOFError) as exc:
+            raise ModelError(f"`path`: cannot read {str(p)!r} as a .npy file ({exc})") from None
     else:
         raise ModelError(f"`path` must be a .mtx, .mtx.gz or .npy file, got {str(p)!r}")
     a = a.toarray() if sp.issparse(a) else np.asarray(a)
+    if a.dtype.kind not in "biuf":
+        raise ModelError(f"`path`: {str(p)!r} does not hold a numeric matrix (dtype {a.dtype})")
     return np.asarray(a, dtype=float)
 
 
@@ -301,8 +349,7 @@ def load_condensed(
         p = Path(path)
         if p.suffix != ".npz":
             raise ModelError(f"`path` must be a .npz file, got {str(p)!r}")
-        with np.load(p) as z:
-            data = {k: z[k] for k in z.files}
+        data = dict(read_npz(p))
         unknown = set(data) - _NPZ_KEYS
         if unknown:
             raise ModelError(
@@ -320,8 +367,11 @@ def load_condensed(
     for name in ("M", "K", "nodes"):
         if name not in data:
             raise ModelError(f"condensed body needs `{name}`")
+    n_modes = np.asarray(data.get("n_modes", 0))
+    if n_modes.size != 1 or n_modes.dtype.kind not in "iu" or int(n_modes) < 0:
+        raise ModelError(f"`n_modes` must be one integer >= 0, got {n_modes.tolist()!r}")
     return CondensedBody(
-        n_modes=int(np.asarray(data.get("n_modes", 0))),
+        n_modes=int(n_modes),
         C=data.get("C"),  # type: ignore[arg-type]
         M=data["M"],  # type: ignore[arg-type]
         K=data["K"],  # type: ignore[arg-type]
@@ -352,10 +402,10 @@ def condensed_body(
         if body is not None:
             positions = body.positions
         elif path is not None:
-            with np.load(path) as z:
-                if "positions" not in z.files:
-                    raise ModelError("`positions`: required (the file has no `positions`)")
-                positions = z["positions"]
+            stored = read_npz(path)
+            if "positions" not in stored:
+                raise ModelError("`positions`: required (the file has no `positions`)")
+            positions = stored["positions"]
         else:
             raise ModelError("`positions`: give one 3-vector per node")
     pts = np.asarray(positions, dtype=float).reshape(-1, 3)

@@ -290,6 +290,12 @@ def mesh_record(
             )
         assert contact_ratio is not None and single_stiffness is not None
         assert double_stiffness is not None
+        if not float(single_stiffness) <= float(double_stiffness):
+            raise ModelError(
+                f"`single_stiffness` ({float(single_stiffness):.4g} N/m) exceeds "
+                f"`double_stiffness` ({float(double_stiffness):.4g} N/m): two tooth pairs in "
+                "contact are in parallel, so they are at least as stiff as one"
+            )
         stiffness = rectangular_wave_coefficients(
             contact_ratio, single_stiffness, double_stiffness, stiffness_harmonics
         )

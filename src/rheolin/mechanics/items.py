@@ -42,13 +42,35 @@ def recorded(method: Callable[_P, _R]) -> Callable[_P, _R]:
 
     @functools.wraps(method)
     def wrapper(*args: _P.args, **kwargs: _P.kwargs) -> _R:
-        out = method(*args, **kwargs)
+        try:
+            out = method(*args, **kwargs)
+        except ModelError:
+            raise
+        except (ValueError, TypeError, OverflowError) as exc:  # a conversion of an argument
+            raise ModelError(_blame(method.__name__, sig, args, kwargs, exc)) from None
         bound = sig.bind(*args, **kwargs).arguments
         model = bound.pop("self")
         model.calls.append((method.__name__, dict(bound)))
         return out
 
     return wrapper
+
+
+def _blame(name: str, sig: inspect.Signature, args: Any, kwargs: Any, exc: BaseException) -> str:
+    """The message of an argument that could not be converted: ``"`outer_diameter`: ..."``
+    when the message quotes its value, else the method's name."""
+    try:
+        bound = sig.bind(*args, **kwargs).arguments
+    except TypeError:
+        return f"`{name}`: {exc}"
+    text = str(exc)
+    for key, value in bound.items():
+        if key == "self" or value is None:
+            continue
+        shown = [repr(value), str(value)] if isinstance(value, str) else [repr(value)]
+        if any(s and s in text for s in shown):
+            return f"`{key}`: {text} (in {name})"
+    return f"`{name}`: {text}"
 
 
 def positive(x: Any, name: str) -> float:

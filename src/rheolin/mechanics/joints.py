@@ -119,7 +119,7 @@ def pair_block(
     Ta, Tb = (np.eye(6) if t is None else t for t in levers)
     if not two:
         return x if levers[0] is None else Ta.T @ x @ Ta
-    if levers == (None, None):
+    if levers[0] is None and levers[1] is None:
         return np.block([[x, -x], [-x, x]])
     return np.block([[Ta.T @ x @ Ta, -Ta.T @ x @ Tb], [-Tb.T @ x @ Ta, Tb.T @ x @ Tb]])
 

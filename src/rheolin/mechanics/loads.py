@@ -46,9 +46,13 @@ def moment_at_node(
     >>> [float(x) for x in moment_at_node((0.0, 10.0, 0.0), (0.0, 0.0, 0.0), (0.5, 0.0, 0.0))]
     [0.0, 0.0, 5.0]
     """
+    for name, v in (("force", force), ("moment", moment)):
+        a = np.asarray(v, dtype=float) if not isinstance(v, str | dict) else None
+        if a is None or a.shape != (3,) or not np.all(np.isfinite(a)):
+            raise ModelError(f"`{name}` must be a finite 3-vector (global axes), got {v!r:.80}")
     T = lever(offset)
     if T is None:
-        return moment
+        return [float(x) for x in moment]
     # F at r: the node's load is T^T (F, M) = (F, M + r x F)
     return list(T.T @ np.concatenate([np.asarray(force, float), np.asarray(moment, float)]))[3:]
 

@@ -39,7 +39,7 @@ from .planetary_assembly import refuse_in_frames
 from .planetary_model import PlanetaryTable
 from .preload import OperatingPoint, preloaded_template
 from .preload import operating_point as solve_operating_point
-from .rigid import RigidNode, disk_node
+from .rigid import disk_node, given_node
 from .rolling import rolling_record
 from .rotation import unit_axis
 from .sections import Section
@@ -227,7 +227,7 @@ class Model(PlanetaryTable):
         e = unit_axis(axis, "axis")
         pts = np.asarray(position, float).reshape(1, 3)
         ratio = None if speed_ratio is None else Fraction(speed_ratio)
-        rigid = RigidNode(mass, np.asarray(inertia, dtype=float))
+        rigid = given_node(mass, inertia)
         self.bodies[name] = Body(name, "rigid", e, pts, ratio, disks={0: rigid})
 
     @recorded
@@ -542,7 +542,7 @@ class Model(PlanetaryTable):
         self.forces[name] = dict(
             body=body,
             node=node,
-            force=force,
+            force=[float(x) for x in force],
             moment=moment_at_node(force, moment, offset),
             order=Fraction(order),
             phase=float(phase),

@@ -34,6 +34,7 @@ __all__ = [
     "couple_unbalance",
     "disk",
     "disk_node",
+    "given_node",
     "rigid_node_coefficients",
     "static_unbalance",
 ]
@@ -341,6 +342,36 @@ def couple_unbalance(
     return RigidNode(node.mass, node.inertia + dJ, node.com)
 
 
+#: Slack of the triangle inequality of principal inertias (a thin disk, ``I_p = 2 I_d``, and
+#: a slender rod, ``I_p = 0``, sit on its boundary).
+TRIANGLE_RTOL = 1e-6
+
+
+def given_node(mass: float, inertia: object) -> RigidNode:
+    """A rigid node from a user's ``mass`` and ``inertia`` (about the centre of mass), checked
+    to be a body that can exist: its principal moments satisfy ``I_a <= I_b + I_c`` for each
+    (``I_a + I_b - I_c = 2 int x_c^2 dm >= 0``).
+
+    >>> given_node(2.0, [0.01, 0.01, 0.02]).mass
+    2.0
+    >>> given_node(2.0, [0.01, 0.01, 0.05])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    rheolin.errors.ModelError: `inertia`: principal moments [0.01, 0.01, 0.05] kg m^2 break ...
+    """
+    node = RigidNode(mass, np.asarray(inertia, dtype=float))
+    I = np.sort(np.linalg.eigvalsh(node.inertia))
+    scale = float(I[-1]) if I.size else 0.0
+    if scale > 0 and I[2] > (I[0] + I[1]) * (1 + TRIANGLE_RTOL) + 1e-12 * scale:
+        shown = ", ".join(f"{x:.4g}" for x in I)
+        raise ModelError(
+            f"`inertia`: principal moments [{shown}] kg m^2 break I3 <= I1 + I2 "
+            f"({I[2]:.4g} > {I[0] + I[1]:.4g}): no body has them (a thin disk has I_p = "
+            "2 I_d at most)"
+        )
+    return node
+
+
 def disk_node(
     existing: RigidNode | None,
     axis: np.ndarray,
@@ -372,7 +403,7 @@ def disk_node(
     if mass is not None or inertia is not None:
         if mass is None or inertia is None:
             raise ModelError("`mass` and `inertia` must be given together")
-        rn = RigidNode(mass, np.asarray(inertia, dtype=float))
+        rn = given_node(mass, inertia)
     elif outer_diameter is not None:
         if width is None:
             raise ModelError("`width` is required with `outer_diameter`")

@@ -108,6 +108,8 @@ class RollingLaw:
                     "`deflection` must start at 0 and increase, `force` start at 0 and not "
                     f"decrease; got deflection {d.tolist()}, force {f.tolist()}"
                 )
+            if not f[-1] > 0.0:
+                raise ModelError("`force`: the table carries no load (every force is 0)")
             self.deflection, self.force_table = d, f
             self._table = PchipInterpolator(d, f, extrapolate=False)
             return
@@ -174,12 +176,13 @@ class RollingLaw:
         return int(self.radial(float(np.hypot(d[0], d[1])))[0] > 0)
 
     def reference_stiffness(self) -> float:
-        """A stiffness for a first guess: the tangent at a 1 um (past any clearance) radial
-        deflection, all elements loaded alike (``elements``: ``Z n K_n delta^(n-1) / 2``)."""
-        if self.law == "table":
-            d = self.deflection
-            assert d is not None
-            return max(float(self._table(min(1e-6, d[-1]), 1)), 1e-300)
+        """A stiffness that stands for the bearing where its tangent vanishes (a clearance):
+        the tangent at a 1 um radial deflection past the clearance, all elements loaded alike
+        (``elements``: ``Z n K_n delta^(n-1) / 2``), or a table's secant at its end."""
+        if self.law == "table":  # its secant at the end: a clearance starts it at zero
+            d, f = self.deflection, self.force_table
+            assert d is not None and f is not None
+            return float(f[-1] / d[-1])
         gap = 1e-6
         kt = self.exponent * self.stiffness * gap ** (self.exponent - 1)
         return kt * (int(self.elements) / 2 if self.law == "elements" else 1.0)

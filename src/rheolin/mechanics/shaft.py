@@ -68,7 +68,8 @@ def circular_layer(
     vals = (float(outer), float(inner), float(o_r), float(i_r))
     if not all(np.isfinite(vals)) or not (0 <= vals[1] < vals[0] and 0 <= vals[3] < vals[2]):
         raise ModelError(
-            "shaft diameters: need 0 <= inner < outer at both ends, got outer/inner "
+            "`outer_diameter`, `inner_diameter`: need 0 <= inner < outer at both ends, got "
+            "outer/inner "
             f"left {vals[0]!r}/{vals[1]!r}, right {vals[2]!r}/{vals[3]!r}"
         )
     if vals[0] == vals[2] and vals[1] == vals[3]:
@@ -238,4 +239,10 @@ def layer_elements(kind: str, shaft: str, n_el: int, elements: Any) -> list[int]
     idx = [int(i) for i in np.atleast_1d(np.asarray(elements)).ravel()]
     if not idx or any(not 0 <= i < n_el for i in idx):
         raise ModelError(f"`elements` must be element indices in [0, {n_el}), got {elements!r}")
+    twice = sorted({i for i in idx if idx.count(i) > 1})
+    if twice:
+        raise ModelError(
+            f"`elements`: element {twice[0]} is listed more than once; a layer covers a set of "
+            "elements (add a second layer for a second sleeve)"
+        )
     return idx

@@ -20,6 +20,7 @@ import scipy.sparse as sp
 from ..errors import ModelError
 from ..system.constraints import LinearConstraint
 from ..system.frames import BodyFrame
+from ..system.motions import Motions
 from ..system.periodic import PeriodicSystem
 from ._term import SpeedTerm, Term
 from .assembly import Assembled
@@ -153,6 +154,7 @@ class SpeedTemplate:
         self.generators = harmonic_generators(model, plan)
         self.constraint = _links(model, dof, self.n_dof)
         self.whirl_pairs = _planes(model, dof)
+        self.motions = _motions(model, dof, self.dof_labels)
         # bodies in a carrier's axes are already in a rotating frame: no body frame on top
         self.body_frames = () if self.frames else _frames(model, dof, plan)
         terms = self._body_terms(model)
@@ -340,6 +342,7 @@ class SpeedTemplate:
             constraint=self.constraint,
         )
         system.whirl_pairs = self.whirl_pairs
+        system.motions = self.motions
         system.keep("body_frames", self.body_frames)
         return system
 
@@ -421,6 +424,21 @@ def _frames(
             axis = (float(ax[0]), float(ax[1]), float(ax[2]))
             out.append(BodyFrame(b.name, int(s), axis, d.reshape(-1, 3), b.name in meshed))
     return tuple(out)
+
+
+def _motions(
+    model: ModelData, dof: dict[tuple[str, int], np.ndarray], labels: list[tuple[str, int, str]]
+) -> Motions:
+    """Each body's rigid motions (its axis, its nodes), for the solvers to tell the motions a
+    steady state may hold (spin and axial) from those nothing holds (:mod:`rheolin.system.
+    motions`)."""
+    return Motions.of_bodies(
+        {
+            b.name: (b.axis, b.positions, [dof[(b.name, i)] for i in range(len(b.positions))])
+            for b in model.bodies.values()
+        },
+        labels,
+    )
 
 
 def _links(

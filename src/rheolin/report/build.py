@@ -32,10 +32,15 @@ REPORT_FILE = "report.html"
 RPM = 30 / math.pi
 
 
+#: What a result file not as rheolin writes it raises in a section builder.
+MALFORMED = (KeyError, TypeError, AttributeError, ValueError, IndexError)
+
+
 def _notes(d: ResultDirectory) -> str:
     notes = list(d.notes)
     for name in ("summary.json", "sweep.json"):
-        notes += [str(w) for w in d.tables.get(name, {}).get("warnings", [])]
+        warned = d.tables.get(name, {}).get("warnings", [])
+        notes += [str(w) for w in warned] if isinstance(warned, list) else [str(warned)]
     if not notes:
         return ""
     items = "".join(f"<li>{html.escape(n)}</li>" for n in dict.fromkeys(notes))
@@ -353,13 +358,12 @@ def build_report(
     name = d.model.spec.model.name if d.model is not None else ""
     title = f"rheolin report: {name or d.path.name}"
     page = Page(title, f"{', '.join(d.kinds) or 'no results'} in {where or d.path}")
-    page.section("notes", "Notes", _notes(d))
-    _run_sections(page, d)
+    _guarded(page, d, _run_sections)
     if {"stability map", "sweep", "campbell"} & set(d.kinds):
-        _stability_sections(page, d)
-    _sweep_sections(page, d, operating_rpm)
-    _campbell_sections(page, d)
-    _modes_sections(page, d)
+        _guarded(page, d, _stability_sections)
+    _guarded(page, d, _sweep_sections, operating_rpm)
+    _guarded(page, d, _campbell_sections)
+    _guarded(page, d, _modes_sections)
     _model_section(page, d, nodes)
     if d.images:
         pngs = "".join(
@@ -367,8 +371,27 @@ def build_report(
             for n, b in d.images.items()
         )
         page.section("pictures", "Figures as files (PNG)", pngs)
-    _inputs_section(page, d, operating_rpm)
+    _guarded(page, d, _inputs_section, operating_rpm)
+    notes = _notes(d)  # first, with what the sections found
+    if notes:
+        page.sections.insert(0, ("notes", "Notes", notes))
     return page.html()
+
+
+def _guarded(page: Page, d: ResultDirectory, build: Any, *args: Any) -> None:
+    """Add the sections of ``build``; result files that are not as rheolin writes them
+    (edited, or another program's) leave them out, said in the notes, not a failed report."""
+    before = len(page.sections)
+    try:
+        build(page, d, *args)
+    except MALFORMED as exc:
+        del page.sections[before:]
+        what = build.__name__.strip("_").removesuffix("_sections").removesuffix("_section")
+        files = ", ".join([*d.tables, *d.datasets])
+        d.notes.append(
+            f"the {what} part of the report is left out: the result files ({files}) are not "
+            f"as rheolin writes them ({type(exc).__name__}: {exc})"
+        )
 
 
 def write_report(

@@ -128,11 +128,14 @@ def read_directory(path: str | Path, model: str | Path | None = None) -> ResultD
             continue
         try:
             if name.endswith(".json"):
-                d.tables[name] = json.loads(p.read_text(encoding="utf-8"))
+                table = json.loads(p.read_text(encoding="utf-8"))
+                if not isinstance(table, dict):
+                    raise ValueError(f"a JSON {type(table).__name__}, not an object")
+                d.tables[name] = table
             else:
                 with xr.open_dataset(p) as ds:
                     d.datasets[name] = ds.load()
-        except (OSError, ValueError) as exc:
+        except (OSError, ValueError, RecursionError) as exc:  # not a file rheolin wrote
             d.notes.append(f"{name} could not be read: {exc}")
     _in_file_units(d)
     for p in sorted(d.path.glob("*.png")):

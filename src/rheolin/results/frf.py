@@ -389,15 +389,18 @@ def system_frequency_response(
         costs = {**turns, **coupling_costs(system)}
         lat = harmonic_lattice(costs, max(p, 1), max_size=10**6)
     else:
-        lat = system_lattice(system, p, max_size=10**6)
+        try:
+            lat = system_lattice(system, p, max_size=10**6)
+        except ValueError as exc:  # refused before it is built
+            raise ModelError(f"order: {exc}") from None
     hill = LatticeHill(system, lat.indices)
     need = hill.memory_bytes()
     limit = memory_budget(budget)
     if need > limit:
         raise MemoryBudgetError(
-            f"the FRF's lattice operator ({len(lat)} harmonics x {n} DOFs) needs an estimated "
-            f"{format_bytes(need)}, more than the memory budget of {format_bytes(limit)}: "
-            "lower the lattice order"
+            f"order: the FRF's lattice operator ({len(lat)} harmonics x {n} DOFs) needs an "
+            f"estimated {format_bytes(need)}, more than the memory budget of "
+            f"{format_bytes(limit)}: lower the lattice order"
         )
     nh = lat.indices.size
     rhs = np.zeros((n * nh, inp.size), dtype=complex)

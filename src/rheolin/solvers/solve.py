@@ -14,8 +14,10 @@ from ..floquet import Continuation, dense_stability_harmonics, floquet, floquet_
 from ..harmonics.balance import HarmonicBalance, SingularBlockError
 from ..harmonics.sets import HarmonicSet, as_harmonic_set
 from ..system.periodic import PeriodicSystem
-from ..system.rigid_modes import RigidModes, find_rigid_modes
+from ..system.rigid_modes import RigidModes
+from ..system.rigid_modes import held_rigid_modes as find_rigid_modes
 from . import direct, krylov, lti, perturbation, transient  # noqa: F401  (register the methods)
+from .arguments import check_arguments, check_loads, check_size
 from .registry import METHODS, RESIDUAL_CHECKED, Options, SolverOutcome
 from .solution import Solution
 
@@ -126,7 +128,10 @@ def solve(
     """
     if not isinstance(system, PeriodicSystem):
         raise TypeError(f"`system` must be a PeriodicSystem, got {type(system).__name__}")
+    check_arguments(maxiter, method, memory_budget, backend, sparse_backend)
+    check_size(system, harmonics, memory_budget)  # before the set is even built
     hset = as_harmonic_set(harmonics)
+    check_loads(system, hset, warn=not isinstance(harmonics, HarmonicSet))
     if not (isinstance(rtol, int | float) and 0.0 < rtol < 1.0):
         raise ValueError(f"`rtol` must be a number in (0, 1), got {rtol!r}")
     if maxiter is not None and (isinstance(maxiter, bool) or int(maxiter) < 1):
@@ -238,7 +243,12 @@ def _initial_guess(op: HarmonicBalance, x0: Solution | np.ndarray | None) -> np.
             if int(n) in where:
                 out[i] = x0.q[where[int(n)]]
         return out
-    arr = np.asarray(x0, dtype=complex)
+    try:
+        arr = np.asarray(x0, dtype=complex)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"`x0` must be a Solution or an array of coefficients, got {x0!r:.80}"
+        ) from None
     if arr.shape != (op.full.size, op.n_dof):
         raise ValueError(
             f"`x0` must have shape ({op.full.size}, {op.n_dof}) (harmonics x DOFs), got {arr.shape}"

@@ -36,6 +36,7 @@ import scipy.linalg as sla
 
 from ..errors import ModelError
 from ..mechanics.rotation import transverse_basis
+from .modes import WHIRL_THRESHOLD
 
 __all__ = ["CriticalSpeedMap", "critical_speed_map", "synchronous_critical_speeds"]
 
@@ -141,12 +142,16 @@ def synchronous_critical_speeds(model: Any, n_modes: int = 4) -> np.ndarray:
 
     The eigenvalues ``W^2`` of the pencil come by QZ; those within ``1e-10 ||K_0|| / ||B||``
     of zero are rigid-body motions (a free axial or torsional motion) and left out, and so
-    are solutions that cannot whirl forward: a backward branch crossing the 1x line (which
-    unbalance on isotropic supports does not excite), a torsional or axial mode. The two
-    planes of an isotropic rotor give one critical speed: within a group of (nearly) equal
-    roots the most forward combination is judged. A rigid rotor of mass ``m`` on two
+    are solutions that unbalance does not excite: a torsional or axial mode (no whirl), and
+    a backward branch crossing the 1x line (whirl ratio at most ``-WHIRL_THRESHOLD``, as
+    the Campbell diagram labels it; on isotropic supports unbalance does not excite it at
+    all). On anisotropic supports the modes are ellipses, or lines (whirl ratio near 0):
+    unbalance excites them, and each is a critical speed, as in the Campbell diagram. The
+    two planes of an isotropic rotor give one critical speed: within a group of (nearly)
+    equal roots the most forward combination is judged. A rigid rotor of mass ``m`` on two
     bearings ``k`` at ``+-a`` from its centre: translation at ``sqrt(2 k / m)``, tilt at
-    ``sqrt(2 k a^2 / (I_d - I_p))`` (none when ``I_p >= I_d``).
+    ``sqrt(2 k a^2 / (I_d - I_p))`` (none when ``I_p >= I_d``); on supports ``k_x != k_y``
+    the translation splits into ``sqrt(2 k_x / m)`` and ``sqrt(2 k_y / m)``.
     """
     M, K0, K2, G, T, built = _averaged_parts(model)
     B = M - 1j * G - K2
@@ -167,10 +172,14 @@ def synchronous_critical_speeds(model: Any, n_modes: int = 4) -> np.ndarray:
         V = X[:, i:j]
         f, b = F @ V, Bk @ V
         Af, Ab = f.conj().T @ f, b.conj().T @ b
-        tot = Af + Ab
-        if np.trace(tot).real > 0:
-            ratio = sla.eigvals(Af - Ab, tot + 1e-300 * np.eye(tot.shape[0])).real
-            if np.nanmax(ratio) >= 0.5:
+        # whirl ratios of the combinations that whirl at all: the pencil (Af - Ab, Af + Ab)
+        # on the range of Af + Ab (a coincident axial or torsional root adds no whirl)
+        w, U = np.linalg.eigh(0.5 * (Af + Ab + (Af + Ab).conj().T))
+        live = w > 1e-10 * max(float(w.max(initial=0.0)), 1e-300)
+        if live.any():
+            P = U[:, live] / np.sqrt(w[live])
+            D = P.conj().T @ (Af - Ab) @ P
+            if np.linalg.eigvalsh(0.5 * (D + D.conj().T)).max() > -WHIRL_THRESHOLD:
                 out.append(float(np.sqrt(mu[i])))
         i = j
     return np.array(out)

@@ -174,7 +174,7 @@ def _nested(values: np.ndarray, convert: Any) -> Any:
 def _plots(result: Any, ds: xr.Dataset, out: Path, quantity: str) -> list[Path]:
     from ..plots import sweep_plot
     from ..plots.stability import plot_stability
-    from ..plots.study import parameter_plot
+    from ..plots.study import QUANTITIES, parameter_plot
 
     spec = result.spec
     if not spec.parameters:
@@ -186,6 +186,8 @@ def _plots(result: Any, ds: xr.Dataset, out: Path, quantity: str) -> list[Path]:
         if smap is not None:
             paths.append(plot_stability(smap, out / "stability_map.png"))
         return paths
+    if QUANTITIES[quantity][0] and quantity not in ds:  # every point failed: nothing to draw
+        return []
     return [
         parameter_plot(result, p.path, out / plot_name(p.path), quantity) for p in spec.parameters
     ]

@@ -127,8 +127,16 @@ class StudySpec:
             params = tuple(parse_vary(t, doc) for t in vary)
         seen: dict[str, str] = {}
         for p in params:
-            if p.field in seen:
-                raise ParameterError(f"{p.path}: {p.field} is already varied (as {seen[p.field]})")
+            for earlier, other in seen.items():  # the same value, or a value inside another
+                if p.field == earlier or any(
+                    a.startswith(b) and a[len(b)] in "[."
+                    for a, b in ((p.field, earlier), (earlier, p.field))
+                    if len(a) > len(b)
+                ):
+                    raise ParameterError(
+                        f"{p.path}: {p.field} is already varied (as {other}: {earlier}); vary a "
+                        "value or a part of it, not both"
+                    )
             seen[p.field] = p.path
         ratio = base_model.speed_plan().base
         for p in params:

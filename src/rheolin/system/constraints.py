@@ -64,7 +64,10 @@ class LinearConstraint:
             for name in ("M", "D", "K")
         }
         loads = {k: Tt @ np.asarray(v) for k, v in system.f.items()}
-        return PeriodicSystem(system.omega, f=loads, **coeffs)
+        out = PeriodicSystem(system.omega, f=loads, **coeffs)
+        motions = getattr(system, "motions", None)
+        out.motions = None if motions is None else motions.through(T)
+        return out
 
     def expand(self, Y: np.ndarray) -> np.ndarray:
         """``q = T y`` along the last axis (``(..., len(keep)) -> (..., n)``)."""

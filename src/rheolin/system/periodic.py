@@ -130,6 +130,9 @@ class PeriodicSystem:
         #: spin about ``x cross y``), when known: gmres's whirl-pair preconditioner holds a
         #: rotating asymmetry exactly with them (:mod:`rheolin.solvers.krylov`)
         self.whirl_pairs: tuple[np.ndarray, np.ndarray] | None = None
+        #: the bodies behind the DOFs, when a model made the system
+        #: (:class:`~rheolin.system.motions.Motions`): which rigid-body modes may be held
+        self.motions: Any = None
         self._derived: dict[str, Any] = {}
 
     # ------------------------------------------------------------------ validation

@@ -35,10 +35,21 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..errors import ModelError
 from .constraints import LinearConstraint
+from .motions import FreeMotion
 from .periodic import PeriodicSystem
 
-__all__ = ["DENSE_LIMIT", "RIGID_TOL", "RigidModes", "find_rigid_modes"]
+__all__ = [
+    "DENSE_LIMIT",
+    "RIGID_TOL",
+    "FreeBodyError",
+    "RigidModes",
+    "find_rigid_modes",
+    "free_body_message",
+    "held_rigid_modes",
+    "unheld_motions",
+]
 
 #: A vector ``v`` is a rigid-body mode when ``||K v|| <= RIGID_TOL || |K| |v| ||`` (mass-scaled
 #: ``K``): its stiffness forces cancel to round-off (~1e-15 once refined), while a body on a
@@ -54,6 +65,13 @@ DENSE_LIMIT = 1000
 #: Lanczos: how many eigenvalues nearest zero are looked at (more rigid modes than this are
 #: refused with a message).
 _SPARSE_K = 12
+
+
+_TOO_MANY = (
+    "bearings: the model has at least {count} rigid-body modes (free motions with mass): "
+    "support the bodies (bearings with axial and torsional components, a drive stiffness) "
+    "so that each has at most a few free motions"
+)
 
 
 def _dense(x: Any) -> np.ndarray:
@@ -98,9 +116,17 @@ class RigidModes(LinearConstraint):
             "bearing the axial position; docs/solvers.md)"
         )
         if np.abs(load).max(initial=0.0) > 0.0:
-            text += (
-                f"; the constraint takes the mean load on {'them' if k > 1 else 'it'}, "
-                f"R^T f_0 = {', '.join(f'{x:.3g}' for x in load)}"
+            motions = getattr(system, "motions", None)
+            named = []
+            if motions is not None:
+                for r, work in zip(self.modes.T, load, strict=True):
+                    body, what, value, unit = motions.held_load(motions.full(r), work)
+                    if body and value:
+                        named.append(f"{value:.4g} {unit} on the {what} of {body!r}")
+            text += f"; the constraint takes the mean load on {'them' if k > 1 else 'it'}, " + (
+                ", ".join(named)
+                if named
+                else f"R^T f_0 = {', '.join(f'{x:.3g}' for x in load)} (mass-normalized modes)"
             )
         return text
 
@@ -174,8 +200,10 @@ def find_rigid_modes(system: PeriodicSystem) -> RigidModes | None:
     """
     M0, K0 = system.coefficient("M", 0), system.coefficient("K", 0)
     n = system.n
-    if M0 is None or K0 is None or n < 2:
+    if M0 is None or n < 2:
         return None
+    if K0 is None:  # no stiffness at all: every motion with mass is free
+        K0 = sp.csr_array((n, n)) if sp.issparse(M0) else np.zeros((n, n))
     sparse = sp.issparse(M0) or sp.issparse(K0)
     d = np.abs(_diagonal(M0))
     if d.max(initial=0.0) <= 0.0:
@@ -188,17 +216,15 @@ def find_rigid_modes(system: PeriodicSystem) -> RigidModes | None:
     else:
         Ks = s[:, None] * np.asarray(K0, float) * s[None, :]
     lam, V, scale = _candidates(Ks, n)
-    if scale == 0.0:
-        return None
+    if scale == 0.0:  # K_0 = 0: the modes are the directions that carry mass
+        if n > DENSE_LIMIT:
+            raise ModelError(_TOO_MANY.format(count=n))
+        return _constraint(system, M0, s[:, None] * np.eye(n)[:, d > 1e-12 * d.max()], sparse)
     small = np.abs(lam) <= _CANDIDATE * scale
     if not small.any():
         return None
     if n > DENSE_LIMIT and small.all():
-        raise ValueError(
-            f"the model has at least {small.size} rigid-body modes (free motions with mass): "
-            "support the bodies (bearings with axial and torsional components, a drive "
-            "stiffness) so that each has at most a few free motions"
-        )
+        raise ModelError(_TOO_MANY.format(count=small.size))
     Vs = _refined(Ks, V[:, small], scale, sparse)
     # the local test: stiffness forces that cancel to round-off (a null vector of K_0 itself,
     # not only of its symmetric part: a circulatory stiffness is not singular)
@@ -217,7 +243,15 @@ def find_rigid_modes(system: PeriodicSystem) -> RigidModes | None:
     Vs = Vs[:, rigid]
     if Vs.shape[1] == 0:
         return None
-    R = s[:, None] * Vs
+    return _constraint(system, M0, s[:, None] * Vs, sparse)
+
+
+def _constraint(system: PeriodicSystem, M0: Any, R: np.ndarray, sparse: bool) -> RigidModes | None:
+    """The rigid modes ``R`` (columns, physical units) made ``M_0``-orthonormal, and the
+    constraint that holds them (see :class:`RigidModes`)."""
+    n = system.n
+    d = np.abs(_diagonal(M0))
+    s = 1.0 / np.sqrt(np.maximum(d, 1e-12 * d.max()))
     Md = M0 if sparse else np.asarray(M0, float)
     mass = np.einsum("ij,ij->j", R, np.asarray(Md @ R))
     R = R[:, mass > 1e-9 * np.abs(mass).max(initial=0.0)]
@@ -252,3 +286,55 @@ def find_rigid_modes(system: PeriodicSystem) -> RigidModes | None:
     G = -np.linalg.solve(C[pivots].T, C[keep].T)
     G[np.abs(G) <= 1e-14 * np.abs(G).max(initial=0.0)] = 0.0
     return RigidModes(pivots=pivots, keep=keep, G=G, n=n, modes=R)
+
+
+class FreeBodyError(ModelError):
+    """A body has a rigid motion that nothing holds and a steady state cannot hold either (a
+    shaft without lateral support): there is no steady state. The message names the body and
+    the direction."""
+
+
+def unheld_motions(system: PeriodicSystem, rigid: RigidModes | None) -> list[FreeMotion]:
+    """The directions of ``rigid``'s modes that a steady state may not hold (anything but a
+    body's spin and axial translation), named by body; empty when the system does not know its
+    bodies (``system.motions`` is None: a system built by hand is held as given)."""
+    motions = getattr(system, "motions", None)
+    if rigid is None or motions is None:
+        return []
+    return list(motions.unheld(rigid.modes))
+
+
+def free_body_message(free: list[FreeMotion], why: str = "") -> str:
+    """One sentence naming the free bodies and their directions (``why``: what leaves them
+    free, default: no bearing, mesh or link acts on that motion)."""
+    order = ("lateral", "tilt", "axial", "spin")
+    comps = ("ux", "uy", "uz", "phix", "phiy", "phiz")
+    bodies: dict[str, tuple[set[str], set[str]]] = {}
+    for f in free:  # one line per body, whatever the number of its free directions
+        kinds, names = bodies.setdefault(f.body, (set(), set()))
+        kinds.update(f.kinds)
+        names.update(f.components)
+    what = "; ".join(
+        FreeMotion(
+            body,
+            tuple(k for k in order if k in kinds),
+            tuple(sorted(names, key=lambda c: comps.index(c) if c in comps else 6)),
+        ).describe()
+        for body, (kinds, names) in bodies.items()
+    )
+    why = why or " (no bearing, mesh or link acts on that motion)"
+    return (
+        f"bearings: no steady state: {what} with nothing holding it{why}. Support it (add a "
+        "bearing); only a drive train's rotation and axial position are held, by the drive "
+        "and a thrust bearing (docs/solvers.md)"
+    )
+
+
+def held_rigid_modes(system: PeriodicSystem) -> RigidModes | None:
+    """:func:`find_rigid_modes`, refused (:class:`FreeBodyError`) when a mode moves a body in a
+    direction a steady state may not hold (:func:`unheld_motions`)."""
+    rigid = find_rigid_modes(system)
+    free = unheld_motions(system, rigid)
+    if free:
+        raise FreeBodyError(free_body_message(free))
+    return rigid

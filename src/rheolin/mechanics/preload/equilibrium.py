@@ -14,15 +14,18 @@ about its operating point:
 
    (``B_b`` the radial relative motion of bearing ``b`` in its plane, ``F_b`` its force on
    the inner ring; ``w_m`` the line of action of mesh ``m``, ``F_m`` its force law, ``k0_m``
-   its nominal mean stiffness, already in ``K_0``). Newton's method with the analytic
-   sparse tangent ``K_0 + sum B^T K_t B + sum w w^T (k_t - k0)``, a backtracking line
-   search on ``|r|``, and load stepping (the load factor halves after a failed step); where
-   the tangent is singular (a bearing with clearance and nothing in contact yet) the step is
-   regularized with the bearings' reference stiffness (Levenberg), which changes the path,
-   not the equilibrium. Rigid links are eliminated as in the dynamics. Free rigid-body
-   motions (the drive train's rotation) are held as the dynamics holds them
-   (``R^T M_0 u = 0``, :mod:`rheolin.system.rigid_modes`); a ``"reaction"`` torque takes the value
-   that balances the others on them, and any load left on them is reported.
+   its nominal mean stiffness, already in ``K_0``). A globalized Newton method
+   (:mod:`.newton`): Newton directions, regularized with the joints' reference stiffness
+   where the tangent is singular (a clearance, nothing in contact yet), and a line search on
+   the energy along each direction, which crosses a clearance in one step; it finds the
+   equilibrium wherever one exists, and where the energy keeps falling past any plausible
+   deflection it refuses naming the joint that cannot carry the load and that load in N.
+   Rigid links are eliminated as in the dynamics. Free rigid-body motions are held as the
+   dynamics holds them (``R^T M_0 u = 0``, :mod:`rheolin.system.rigid_modes`) when they are
+   a drive train's rotation or axial motion; a ``"reaction"`` torque takes the value that
+   balances the others on them, and any load left on them is reported in N m or N. A
+   motion nothing may hold (a body without lateral support) that the load pushes has no
+   equilibrium: refused, naming the body and the direction.
 2. **Linearization.** Each bearing becomes a linear joint with its tangent stiffness and a
    preload (``F(d_s) - K_t d_s``, so that the static force is exact); each mesh's stiffness
    function is scaled by ``k_t / k0`` and its static transmission error offset so that the
@@ -37,36 +40,39 @@ equilibrium in the dynamics.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import functools
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from ...errors import ModelError
 from ...system.periodic import PeriodicSystem
-from ...system.rigid_modes import find_rigid_modes
+from ...system.rigid_modes import (
+    FreeBodyError,
+    find_rigid_modes,
+    free_body_message,
+    unheld_motions,
+)
 from ..assembly import Assembled
 from ..items import ModelData, positive
 from ..rolling import MeshLoadLaw, RollingLaw
 from ..rotation import transverse_basis
 from ..template import assemble_model
+from . import checks
 from .linearize import base_model, linearized_model
+from .newton import Unbounded, minimize
 from .state import BearingState, MeshState, OperatingPoint
 
 __all__ = ["LoadedMesh", "RollingJoint", "StaticEquilibrium", "operating_point"]
 
-#: Newton: relative residual of a converged equilibrium, iterations per load step, and the
-#: smallest load step before giving up.
-RTOL = 1e-10
-MAX_ITERATIONS = 60
-MIN_STEP = 1.0 / 4096
-
-#: A static deflection beyond this fraction of the model's size is not a small-deflection
-#: operating point (the linear theory of every joint and body is void there).
-MAX_DEFLECTION = 1e-2
+#: Load steps of the fallback continuation, when the equilibrium under the whole load is
+#: not found at once.
+LOAD_STEPS = (0.125, 0.25, 0.5, 0.75, 1.0)
+#: How far the line search may look for an equilibrium, in units of the largest plausible
+#: deflection (:data:`~.checks.MAX_DEFLECTION` of the model's size; 1 mm for a point model).
+SEARCH_REACH = 10.0
 
 
 @dataclass
@@ -130,14 +136,18 @@ class StaticEquilibrium:
         self.joint_operators()
         self.reduction()
         self.reaction_torques()
-        y, iterations, steps = self.load_stepping()
+        y, iterations, steps = self.equilibrium()
         u = np.asarray(self.T @ y)
         r_end, _ = self.residual(y, 1.0, False)
         residual = float(np.linalg.norm(self.weight * r_end)) / self.scale
-        _plausible(self.model, self.bearings, u, self.a)
+        checks.plausible(self.model, self.bearings, u, self.a)
         bstates, mstates = self.joint_states(u)
         damping = {j.name: j.damping * (j.plane @ j.plane.T) for j in self.bearings}
         lin = linearized_model(self.model, bstates, damping, mstates, self.torques)
+        self.held_by_joints(lin, bstates)
+        held = checks.held_loads(
+            self.model, self.R, self.f0, self.a.dof_labels, self.a.node_index, self.torques
+        )
         return OperatingPoint(
             speed=self.speed,
             displacement=u,
@@ -151,6 +161,7 @@ class StaticEquilibrium:
             load_steps=steps,
             residual=residual,
             model=lin,
+            info={"held_loads": held},
         )
 
     def _dofs(self, body: str, node: int) -> np.ndarray:
@@ -209,12 +220,17 @@ class StaticEquilibrium:
             M={0: sp.csc_array(T1.T @ self.M0 @ T1)},
             K={0: sp.csc_array(T1.T @ Kref @ T1)},
         )
+        motions = system.motions
+        if motions is not None and system.constraint is not None:
+            motions = motions.through(T1)
+        reduced.motions = motions
         rigid = find_rigid_modes(reduced)
         if rigid is not None:
             self.T = sp.csr_array(T1 @ rigid.transform())
             self.R = T1 @ rigid.modes  # rigid modes over every DOF
         else:
             self.T, self.R = T1, np.zeros((n, 0))
+        self.free = unheld_motions(reduced, rigid)
 
     def reaction_torques(self) -> None:
         """Every torque's value: a ``"reaction"`` torque balances the others on the free
@@ -256,40 +272,109 @@ class StaticEquilibrium:
             floor = 1e-9 * (np.abs(R).T @ np.abs(f0))
             rigid_load = np.where(np.abs(rigid_load) > floor, rigid_load, 0.0)
         self.rigid_load = rigid_load
+        checks.unheld_with_load(self.free, f0, self.a.dof_labels)
 
-    def load_stepping(self) -> tuple[np.ndarray, int, int]:
-        """The reduced equilibrium ``y`` by damped Newton over a growing load factor (halved
-        after a failed step), with the Newton iterations and load steps taken."""
+    def equilibrium(self) -> tuple[np.ndarray, int, int]:
+        """The reduced equilibrium ``y`` under the whole load by the globalized Newton method
+        (:mod:`.newton`), from rest; should it stall, by continuation over the load factor
+        (:data:`LOAD_STEPS`). Returns ``y``, the Newton iterations and the load steps."""
         self._reduced_operators()
-        T = self.T
-        guess = np.zeros(T.shape[1])
-        try:  # a first guess: the linear problem with the joints' reference stiffness
-            with np.errstate(all="ignore"):
-                g = spla.splu(sp.csc_array(self.Kr + self.Kreg)).solve(self.fr)
-            if np.all(np.isfinite(g)):
-                guess = g
-        except RuntimeError:
-            pass
-        y = guess
-        lam, step = 0.0, 1.0
-        iterations = steps = 0
-        last: tuple[float, float] = (0.0, np.inf)
-        while lam < 1.0:
-            target = min(1.0, lam + step)
-            start = y if lam > 0 else target * guess  # from the last equilibrium, else linear
-            ok, y_new, its, res = _newton(
-                self.residual, start, target, self.scale, self.Kreg, self.weight
+        size = checks.model_size(self.model)
+        reach = SEARCH_REACH * (checks.MAX_DEFLECTION * size if size > 0 else 1e-3)
+        trans = np.array([c in ("ux", "uy", "uz") for _, _, c in self.a.dof_labels])
+
+        def too_far(y: np.ndarray) -> bool:
+            return float(np.abs(np.asarray(self.T @ y)[trans]).max(initial=0.0)) > reach
+
+        y = np.zeros(self.T.shape[1])
+        iterations = 0
+        steps: tuple[float, ...] = (1.0,)
+        for attempt in range(2):
+            for k, lam in enumerate(steps):
+                try:
+                    out = minimize(
+                        functools.partial(self.at_load, lam),
+                        y,
+                        self.Kreg + self.Kr,
+                        self.weight,
+                        self.scale * lam,
+                        too_far,
+                    )
+                except Unbounded as exc:
+                    u, d = np.asarray(self.T @ exc.y), np.asarray(self.T @ exc.direction)
+                    raise ModelError(
+                        checks.unbounded(
+                            self.bearings, self.meshes, u, d, lam * self.f0,
+                            reach / SEARCH_REACH,
+                        )
+                    ) from None  # fmt: skip
+                iterations += out.iterations
+                if not out.converged:
+                    break
+                y = out.y
+                if k == len(steps) - 1:
+                    return y, iterations, len(steps)
+            if attempt == 0:
+                y, steps = np.zeros_like(y), LOAD_STEPS
+        u = np.asarray(self.T @ out.y)
+        raise ModelError(
+            checks.stalled(self.bearings, self.meshes, u, self.force_residual(u), self.a.dof_labels)
+        )
+
+    def at_load(self, lam: float, y: np.ndarray, tangent: bool) -> tuple[np.ndarray, Any]:
+        """:meth:`residual` at load factor ``lam`` (the argument order of :mod:`.newton`)."""
+        return self.residual(y, lam, tangent)
+
+    def force_residual(self, u: np.ndarray) -> np.ndarray:
+        """The out-of-balance forces of every DOF at ``u`` [N, N m], less what the held rigid
+        modes take (``M_0 R R^T r``: the drive, a thrust bearing)."""
+        r = self.K0 @ u - self.f0
+        for j in self.bearings:
+            F, _ = j.law.force(j.B @ u)
+            r = r - j.B.T @ F
+        for m in self.meshes:
+            d = float(m.w @ u)
+            Fm, _ = m.law.force(d, m.nominal)
+            r = r + m.w * (Fm - m.nominal * d)
+        if self.R.size:
+            r = r - self.M0 @ (self.R @ (self.R.T @ r))
+        return np.asarray(r, dtype=float)
+
+    def held_by_joints(self, lin: ModelData, bstates: dict[str, BearingState]) -> None:
+        """Refuse an operating point whose linearized model leaves a body free where only a
+        support can hold it: a rolling bearing that the static load does not close (no
+        element in contact, no stiffness), or closes along one direction only."""
+        weak = {}
+        for k, b in bstates.items():
+            kt = np.linalg.eigvalsh(0.5 * (b.stiffness + b.stiffness.T))
+            if int(np.count_nonzero(kt > 1e-9 * max(float(kt.max()), 1e-300))) < 2:
+                weak[k] = b
+        if not weak:
+            return
+        a = assemble_model(lin, self.speed)
+        system = a.system
+        if system.constraint is not None:
+            system = system.constraint.reduce(system)
+        free = unheld_motions(system, find_rigid_modes(system))
+        if not free:
+            return
+        laws = self.model.rolling
+        why = []
+        for k, b in weak.items():
+            contact = (
+                f"{b.in_contact} of {b.elements} elements in contact"
+                if b.elements
+                else ("in contact" if b.in_contact else "not in contact")
             )
-            iterations += its
-            if ok:
-                y, lam, steps = y_new, target, steps + 1
-                step = min(2 * step, 1.0)
-                continue
-            last = (target, res)
-            step /= 2
-            if step < MIN_STEP:
-                raise ModelError(_diagnose(self.model, self.bearings, T @ y_new, lam, last))
-        return y, iterations, steps
+            why.append(
+                f"rolling bearing {k!r} has {contact} (radial deflection "
+                f"{np.linalg.norm(b.deflection) * 1e6:.3g} um, clearance "
+                f"{laws[k]['law'].clearance * 1e6:.3g} um): the static load "
+                + ("does not close it" if not b.in_contact else "closes it along one direction")
+            )
+        raise FreeBodyError(
+            free_body_message(free, why=" at the operating point: " + "; ".join(why))
+        )
 
     def _reduced_operators(self) -> None:
         """The operators on the reduced unknowns ``u = T y``, the regularization ``Kreg`` and
@@ -371,124 +456,3 @@ class StaticEquilibrium:
             ksec = F / d if d else law.k(0.0, k0)[0]
             mstates[name] = MeshState(force=F, deflection=d, secant=ksec, stiffness=kt, nominal=k0)
         return bstates, mstates
-
-
-def _newton(
-    evaluate: Callable[[np.ndarray, float, bool], tuple[np.ndarray, Any]],
-    y0: np.ndarray,
-    lam: float,
-    scale: float,
-    Kreg: sp.csc_array,
-    weight: np.ndarray,
-) -> tuple[bool, np.ndarray, int, float]:
-    """Damped Newton at load factor ``lam`` from ``y0``: ``(converged, y, iterations, |W r|)``
-    (``W = diag(weight)``: residuals in consistent units)."""
-    y = y0.copy()
-    r, J = evaluate(y, lam, True)
-    nr = float(np.linalg.norm(weight * r))
-    absJ = abs(sp.csc_array(J))
-
-    def tol(y: np.ndarray) -> float:
-        # the load's scale, or round-off in the internal forces (stiff parts: |K| |y|)
-        noise = 1e3 * np.finfo(float).eps * float(np.linalg.norm(weight * (absJ @ np.abs(y))))
-        return max(RTOL * scale * lam, noise)
-
-    for it in range(1, MAX_ITERATIONS + 1):
-        if nr <= tol(y) or nr == 0.0:
-            return True, y, it - 1, nr
-        moved = False
-        for mu in (0.0, 1e-6, 1e-3, 1.0):
-            M = J if mu == 0.0 else J + mu * Kreg
-            try:
-                with np.errstate(all="ignore"):
-                    dy = -spla.splu(sp.csc_array(M)).solve(r)
-            except RuntimeError:  # singular
-                continue
-            if not np.all(np.isfinite(dy)):
-                continue
-            alpha = 1.0
-            while alpha >= 1.0 / 256:
-                yt = y + alpha * dy
-                rt, Jt = evaluate(yt, lam, True)
-                nt = float(np.linalg.norm(weight * rt))
-                if nt < (1 - 1e-4 * alpha) * nr:
-                    y, r, J, nr, moved = yt, rt, Jt, nt, True
-                    break
-                alpha /= 2
-            if moved:
-                break
-        if not moved:
-            return nr <= 10 * tol(y), y, it, nr
-    return nr <= tol(y), y, MAX_ITERATIONS, nr
-
-
-def _diagnose(
-    model: ModelData,
-    bearings: list[RollingJoint],
-    u: np.ndarray,
-    lam: float,
-    last: tuple[float, float],
-) -> str:
-    """The message of a failed equilibrium, naming the joint most likely at fault."""
-    target, res = last
-    head = (
-        f"static equilibrium not found: Newton stalled at {target:.1%} of the static load "
-        f"(solved up to {lam:.1%}; residual {res:.3g} N)"
-    )
-    worst, why = None, ""
-    for j in bearings:
-        name, law = j.name, j.law
-        d = j.B @ u
-        r = float(np.hypot(*d))
-        if law.in_contact(d) == 0:
-            return (
-                f"{head}; bearing {name!r} has no rolling element in contact (radial deflection "
-                f"{r * 1e6:.3g} um, clearance {law.clearance * 1e6:.3g} um): nothing holds the "
-                "shaft there. Reduce the clearance or add a support"
-            )
-        if worst is None or r > worst:
-            worst, why = r, f"; bearing {name!r} deflects most ({r * 1e6:.3g} um)"
-    meshes = [k for k, g in model.meshes.items() if g.get("load_law") is not None]
-    if why:
-        return head + why
-    if meshes:
-        return f"{head}; check the load law of mesh {meshes[0]!r}"
-    return head
-
-
-def _plausible(model: ModelData, bearings: list[RollingJoint], u: np.ndarray, a: Assembled) -> None:
-    """Refuse an equilibrium the laws cannot vouch for: a table bearing beyond its table, or
-    a deflection that is not small against the model (a joint that cannot carry its load lets
-    the linear rest of the model find a far-away balance)."""
-    for j in bearings:
-        name, law = j.name, j.law
-        if law.law == "table":
-            assert law.deflection is not None and law.force_table is not None
-            r = float(np.hypot(*(j.B @ u)))
-            end = float(law.deflection[-1])
-            if r > end * (1 + 1e-9):
-                raise ModelError(
-                    f"bearing {name!r} operates at {r * 1e6:.4g} um radial deflection, beyond "
-                    f"its table (up to {end * 1e6:.4g} um, {law.force_table[-1]:.4g} N): it "
-                    "cannot carry its load on the table; extend the table or check the load"
-                )
-    positions = np.concatenate([b.positions for b in model.bodies.values()])
-    size = float(np.ptp(positions, axis=0).max()) if len(positions) > 1 else 0.0
-    peak, where = 0.0, ("", -1)
-    for key, i in a.node_index.items():
-        v = float(np.linalg.norm(u[6 * i : 6 * i + 3]))
-        if v > peak:
-            peak, where = v, key
-    if size > 0 and peak > MAX_DEFLECTION * size:
-        worst = max(bearings, key=lambda j: float(np.hypot(*(j.B @ u))), default=None)
-        blame = (
-            f"; bearing {worst.name!r} deflects {float(np.hypot(*(worst.B @ u))) * 1e3:.4g} mm"
-            if worst is not None
-            else ""
-        )
-        raise ModelError(
-            f"static equilibrium at an implausible deflection: {peak * 1e3:.4g} mm at "
-            f"{where[0]} node {where[1]}, {peak / size:.3g} of the model's size{blame}: a "
-            "joint cannot carry its load (a small-deflection operating point needs below "
-            f"{MAX_DEFLECTION:.0%})"
-        )

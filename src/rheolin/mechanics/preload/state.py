@@ -106,6 +106,8 @@ class OperatingPoint:
             },
             "torques_N_m": dict(self.torques),
             "rigid_load": self.rigid_load.tolist(),
+            "held_loads": [dict(h, torques=dict(h["torques"])) for h in self.held_loads()],
+            "notes": self.notes(),
             "iterations": self.iterations,
             "load_steps": self.load_steps,
             "residual": self.residual,
@@ -136,9 +138,28 @@ class OperatingPoint:
                 f"operating stiffness {m.stiffness:.4g} N/m ({m.stiffness / m.nominal:.3g} x "
                 "nominal)"
             )
-        if np.abs(self.rigid_load).max(initial=0.0) > 0:
-            lines.append(
-                "  load held by the constant-speed constraint (unbalanced torques): R^T f = "
-                + ", ".join(f"{x:.3g}" for x in self.rigid_load)
-            )
+        lines += [f"  {n}" for n in self.notes()]
         return lines
+
+    def held_loads(self) -> list[dict[str, Any]]:
+        """The mean load on each held rigid-body mode, in N m (a drive train's rotation) or N
+        (its axial motion) at the body it moves most (``info["held_loads"]``)."""
+        return list(self.info.get("held_loads", []))
+
+    def notes(self) -> list[str]:
+        """Warnings about the operating point: a net torque or thrust that nothing in the
+        model balances, which the constant-speed assumption (the drive) takes."""
+        out = []
+        for h in self.held_loads():
+            acting = ", ".join(f"{k} {v:.6g} N m" for k, v in h["torques"].items())
+            what = "torque" if h["unit"] == "N m" else "axial force"
+            motion = "rotation" if h["unit"] == "N m" else "axial motion"
+            out.append(
+                f"unbalanced {what}: the drive train's free {motion} carries a net "
+                f"{h['load']:.4g} {h['unit']} at body {h['body']!r}"
+                + (f" (torques: {acting})" if acting else "")
+                + "; the constant-speed assumption holds it (the drive takes it). Declare the "
+                "output torque as 'reaction' to balance it"
+                + (", or support the axial motion" if what == "axial force" else "")
+            )
+        return out
