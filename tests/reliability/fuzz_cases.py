@@ -28,7 +28,7 @@ FIELD = re.compile(
     r"(\b(model|harmonics|shafts|rigid_bodies|condensed_bodies|meshes|forces|loads|mass|"
     r"torques|rigid_links|bearings|fe|condense|interface|spec|memory|input)\b[\[.:]"
     r"|--[a-z-]+|\.toml|invalid model file|rheolin \w+:|RHEOLIN_[A-Z_]+|DIRECTORY:"
-    r"|\b(bearing|mesh|torque|body) '[^']+'"
+    r"|\b(bearing|mesh|torque|body)s? '[^']+'"
     r"|\b(Shaft|Disk|Bearing|Seal)Element\w*|\bPointMass\w*|ROSS file)"
 )
 

@@ -261,8 +261,9 @@ class StaticEquilibrium:
                 reactions
             ):
                 raise ModelError(
-                    f"reaction torques {reactions}: they do not act on independent free "
-                    "rotations of the drive train; give all but one of them a value [N m]"
+                    f"reaction torques {', '.join(repr(r) for r in reactions)}: they do not "
+                    "act on independent free rotations of the drive train; give all but one "
+                    "of them a value [N m]"
                 )
             self.torques.update({k: float(v) for k, v in zip(reactions, x, strict=True)})
             f0 = f0 + A @ x
