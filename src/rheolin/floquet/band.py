@@ -32,6 +32,7 @@ from ..system.periodic import PeriodicSystem
 from .averaged import MAX_AVERAGED_DENSE, Averaged
 from .complement import KAPPA_LIMIT, Complement, Scan, energy_certificate, touched_dofs
 from .result import EPS
+from .shift_invert import LU_FILL
 
 __all__ = [
     "BAND_ABOVE",
@@ -251,8 +252,6 @@ def band_memory(system: PeriodicSystem, modes: int = BAND_MODES) -> int:
     """Estimated peak memory [bytes] of :func:`band_modes` with ``modes`` modes: the LU of
     ``K_0`` (at the lattice search's fill), the two Arnoldi bases, the band's vectors and the
     scan's factor and transfer blocks."""
-    from .search import LU_FILL
-
     n = system.n
     K, D, M = _parts(system)
     nnz = int((abs(K) + abs(D) + abs(M)).nnz)

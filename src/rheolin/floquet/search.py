@@ -33,7 +33,15 @@ from .outcome import LatticeExponents
 from .representatives import lattice_result
 from .result import SAFETY
 from .select import ACCEPT_WEIGHT, CENTRED, Candidate, clusters, count, select, targets
-from .shift_invert import BalancedPencil, ShiftInvert, arnoldi, factor, harmonic_block, polish
+from .shift_invert import (
+    LU_FILL,
+    BalancedPencil,
+    ShiftInvert,
+    arnoldi,
+    factor,
+    harmonic_block,
+    polish,
+)
 
 __all__ = ["ARNOLDI_STEPS", "ARNOLDI_TOL", "LatticeSearch", "lattice_exponents", "lattice_memory"]
 
@@ -56,9 +64,6 @@ WARM_STEPS = (4, *ARNOLDI_STEPS)
 #: find copies further from the shift, not a better one (bench/stability.py, design notes).
 STALL_CHECKPOINT = 3
 STALL_GAIN = 0.1
-
-#: Estimated LU fill of the lattice operator (entries of the factors / entries of ``Q``).
-LU_FILL = 12.0
 
 
 def lattice_exponents(
@@ -488,7 +493,7 @@ def lattice_memory(system: PeriodicSystem, lattice: Lattice, k: int = 8) -> int:
 
     Counted without building anything: the entries of the lattice operator (from the block
     patterns and the number of harmonic pairs each coefficient harmonic couples), its LU at
-    :data:`LU_FILL` times those entries, the Arnoldi basis, and the dense averaged modes (a
+    :data:`~rheolin.floquet.shift_invert.LU_FILL` times those entries, the Arnoldi basis, and the dense averaged modes (a
     large model's band: :func:`~rheolin.floquet.band.band_memory`, counted by the caller).
     """
     H = lattice.indices

@@ -16,7 +16,10 @@ import scipy.sparse.linalg as spla
 
 from ..harmonics.hill_lattice import LatticeHill
 
-__all__ = ["DGKS", "PARDISO_ABOVE", "PARDISO_ABOVE_ARNOLDI", "SPLU"]
+__all__ = ["DGKS", "LU_FILL", "PARDISO_ABOVE", "PARDISO_ABOVE_ARNOLDI", "SPLU"]
+
+#: Estimated LU fill of the lattice operator (entries of the factors / entries of ``Q``).
+LU_FILL = 12.0
 
 
 #: SuperLU options for the lattice operator: ``Q(sigma)`` is structurally symmetric (harmonic

@@ -20,7 +20,7 @@ import math
 from functools import lru_cache
 from typing import Any
 
-__all__ = ["DIMENSIONS", "SI_RANGE", "UnitError", "to_si", "unit_registry"]
+__all__ = ["DIGITS", "DIMENSIONS", "SI_RANGE", "UnitError", "significant", "to_si", "unit_registry"]
 
 #: Quantity kinds: SI unit they convert to, and an example for error messages.
 DIMENSIONS: dict[str, tuple[str, str]] = {
@@ -125,3 +125,16 @@ def _parse(text: str, kind: str, unit: str, example: str) -> float:
             f"got {text!r} with dimension {q.dimensionality}"
         )
     return float(q.to(unit).magnitude) if unit else float(q.to("dimensionless").magnitude)
+
+
+#: Significant digits of a number printed for reading (rpm from rad/s and back).
+DIGITS = 12
+
+
+def significant(x: float, digits: int = DIGITS) -> float:
+    """``x`` rounded to ``digits`` significant digits: 1500 rpm read from the command line
+    and turned into rad/s and back prints as 1500.0, not 1500.0000000000002."""
+    x = float(x)
+    if x == 0 or not math.isfinite(x):
+        return x
+    return round(x, digits - 1 - math.floor(math.log10(abs(x))))

@@ -31,6 +31,8 @@ from typing import Any
 
 import xarray as xr
 
+from ..io.units import significant
+
 __all__ = ["UNITS", "missing_units", "significant", "speed_attrs", "with_units"]
 
 _ONE = (
@@ -55,18 +57,6 @@ UNITS: dict[str, str] = {
     **dict.fromkeys(("position", "response", "dte"), "m"),
     "stiffness": "N/m",
 }
-
-#: Significant digits of a number printed for reading (rpm from rad/s and back).
-DIGITS = 12
-
-
-def significant(x: float, digits: int = DIGITS) -> float:
-    """``x`` rounded to ``digits`` significant digits: 1500 rpm read from the command line
-    and turned into rad/s and back prints as 1500.0, not 1500.0000000000002."""
-    x = float(x)
-    if x == 0 or not math.isfinite(x):
-        return x
-    return round(x, digits - 1 - math.floor(math.log10(abs(x))))
 
 
 def _numeric(da: xr.DataArray) -> bool:

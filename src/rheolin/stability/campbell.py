@@ -103,7 +103,7 @@ class CampbellResult:
         """
         import xarray as xr
 
-        from ..results.units import significant
+        from ..io.units import significant
 
         crit = self.critical_speeds
         hz = 1.0 / (2 * np.pi)
