@@ -99,3 +99,19 @@ def test_condensed_body_and_bearings_between_bodies_are_drawn():
         assert entry in labels
     texts = [t.get_text() for t in fig.axes[0].texts if t.get_visible()]
     assert "housing (condensed, 0 modes)" in texts
+
+
+def test_a_huge_equivalent_disk_is_drawn_smaller_and_says_its_size():
+    """A disk given by mass and inertia is drawn as the uniform disk with the same polar
+    inertia, diameter ``2 sqrt(2 J_p / m)``; the wind turbine's rotor (14 t, 5e5 kg m^2: 16.9 m)
+    is drawn at EQUIVALENT_CAP times the largest dimensioned diameter, its true size kept."""
+    from rheolin.plots.geometry import EQUIVALENT_CAP
+
+    model = load_model(example_path("wind-turbine"))
+    geo = model_geometry(model)
+    (rotor,) = [d for d in geo.disks if d.body == "main_shaft" and d.node == 0]
+    assert rotor.equivalent == pytest.approx(2 * np.sqrt(2 * 5.0e5 / 14000), rel=1e-12)
+    # the largest diameter the file gives as a dimension: the 82-tooth gear blank, 697 mm
+    assert rotor.outer == pytest.approx(EQUIVALENT_CAP * 0.697, rel=1e-12)
+    text = [t.get_text() for ax in model_figure(model).axes for t in ax.texts]
+    assert any("16.9 m diameter, drawn smaller" in t for t in text)

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -70,6 +70,9 @@ class DiskShape:
     teeth: int | None = None
     pitch: float | None = None
     unbalance: bool = False
+    #: the equivalent diameter [m] of a disk given by mass and inertia when it is drawn
+    #: smaller (:data:`EQUIVALENT_CAP`), else None
+    equivalent: float | None = None
 
 
 @dataclass(frozen=True)
@@ -283,6 +286,7 @@ def model_geometry(model: Any) -> Geometry:
         )
     _planetary_meshes(model, geo, gears)
     calls = _disk_calls(model)
+    equivalent: set[int] = set()  # indices of the disks given by mass and inertia
     for name, body in model.bodies.items():
         e = geo.axes[name]
         if body.kind == "shaft":
@@ -299,6 +303,7 @@ def model_geometry(model: Any) -> Geometry:
             else:
                 outer, width = _equivalent_disk(rigid, e)
                 inner = 0.0
+                equivalent.add(len(geo.disks))
             gear = gears.get((name, int(node)))
             unbalance = bool(args.get("unbalance") or args.get("couple_unbalance"))
             geo.disks.append(
@@ -335,7 +340,31 @@ def model_geometry(model: Any) -> Geometry:
         geo.links.append(LinkShape(name, a, b))
     for name, t in model.torques.items():
         geo.torques[name] = (t["body"], int(t["node"]), t["torque"])
+    geo.disks = _capped(geo.disks, geo.segments, equivalent)
     return geo
+
+
+#: A disk given only by mass and inertia is drawn at most this many times the largest diameter
+#: given as a dimension (a wind-turbine rotor's equivalent disk is 17 m across and would hide
+#: the drive train); its label gives the equivalent diameter.
+EQUIVALENT_CAP = 2.5
+
+
+def _capped(
+    disks: list[DiskShape], segments: list[Segment], equivalent: set[int]
+) -> list[DiskShape]:
+    sized = [d.outer for i, d in enumerate(disks) if i not in equivalent]
+    sized += [max(s.outer) for s in segments]
+    if not sized or max(sized) <= 0:
+        return disks
+    cap = EQUIVALENT_CAP * max(sized)
+    out = []
+    for i, d in enumerate(disks):
+        if i in equivalent and d.outer > cap:
+            scale = cap / d.outer
+            d = replace(d, outer=cap, width=d.width * scale, equivalent=d.outer)
+        out.append(d)
+    return out
 
 
 def _planetary_meshes(

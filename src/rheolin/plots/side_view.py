@@ -184,6 +184,9 @@ def side_view(ax: Any, geo: Geometry, bodies: list[str], nodes: bool) -> tuple[s
             ax.plot([h - w / 2, h + w / 2], [v + p, v + p], "--", color="k", lw=0.6, zorder=4)
         if disk.unbalance:
             ax.plot(h, v + r, "v", color="tab:red", ms=4, zorder=5)
+        if disk.equivalent is not None:  # drawn smaller than its equivalent disk
+            ax.text(h, v + r, f"equivalent disk: {disk.equivalent:.3g} m diameter, drawn smaller",
+                    ha="center", va="bottom", fontsize=7, color="0.25", zorder=6)  # fmt: skip
         drawn.add("gear" if gear else "disk")
     for support in geo.supports:
         if support.body not in inside:
