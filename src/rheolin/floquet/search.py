@@ -493,8 +493,9 @@ def lattice_memory(system: PeriodicSystem, lattice: Lattice, k: int = 8) -> int:
 
     Counted without building anything: the entries of the lattice operator (from the block
     patterns and the number of harmonic pairs each coefficient harmonic couples), its LU at
-    :data:`~rheolin.floquet.shift_invert.LU_FILL` times those entries, the Arnoldi basis, and the dense averaged modes (a
-    large model's band: :func:`~rheolin.floquet.band.band_memory`, counted by the caller).
+    :data:`~rheolin.floquet.shift_invert.LU_FILL` times those entries, the Arnoldi basis,
+    and the dense averaged modes (a large model's band:
+    :func:`~rheolin.floquet.band.band_memory`, counted by the caller).
     """
     H = lattice.indices
     n = system.n
