@@ -54,7 +54,9 @@ MAX_ORDER = typer.Option(
     help="Frequency cut-off in orders of the input speed (default: the file's, else none).",
 )
 STABILITY = typer.Option(
-    "auto", help="Floquet check: auto (small models only), on, off.", case_sensitive=False
+    "auto",
+    help="Floquet check: auto (when it fits the memory budget), on, off.",
+    case_sensitive=False,
 )
 RTOL = typer.Option(
     1e-10,
