@@ -14,6 +14,59 @@ Usage::
 
     OPENBLAS_NUM_THREADS=1 python bench/stability.py [--speeds 50]
         [--out bench/results/stability.md]
+
+Design notes
+------------
+The figures behind the constants and choices of ``rheolin.floquet`` (their comments give the
+reason in one sentence and point here). All on the embedded gearbox at 3000 rpm unless said,
+BLAS on one thread, 2 cores, timed with ``time.perf_counter`` around the step named inside
+one ``rl.floquet(system)`` call (or over the whole verdict); the commit that made the choice
+says more (``git show <commit>``).
+
+* ``shift_invert.SPLU``, the ordering of ``Q(sigma)`` (c1e7168): SuperLU in symmetric mode
+  (minimum degree on ``A + A^T``, diagonal pivots above 1 % of the column) against column AMD
+  with a 0.1 threshold: order 2 (4,410 unknowns) 6.5 ms against 8 ms per factor, order 3
+  (14,994) 25 ms against 80-170 ms, with 2-3x less fill and 2x faster solves (1.2 against
+  3 ms at order 3); residuals 1e-12 either way. The verdict went from 4.1 to 3.1 s.
+* ``shift_invert.PARDISO_ABOVE`` and ``PARDISO_ABOVE_ARNOLDI`` (c1e7168, 11d663b): factor /
+  solve times, MKL PARDISO (refining only after perturbed pivots) against SuperLU (symmetric
+  mode): order 1 (882 unknowns) 0.33 / 0.085 ms against 0.40 / 0.040 ms; order 2 (4,410)
+  1.9-2.7 / 0.4-0.5 ms against 2.4-7 / 0.2-0.25 ms (SuperLU's pivoting varies with the shift:
+  4.3 ms on average over a verdict, whose order-2 confirmation took 0.12 s less per speed with
+  PARDISO); order 3 (14,994) 10-11.5 / 1.4-2.1 ms against 18-40 / 1.0-1.2 ms; order 4
+  (41,454) 74 / 5.5 ms against 550 / 11 ms. A cold Arnoldi run (up to 54 solves per factor)
+  favours SuperLU's solves up to order 3.
+* ``shift_invert.pencil_norms`` (c1e7168): assembling the first-order pencil for its 1-norms
+  cost 0.15 s at order 3; the column sums of the lattice couplings give the same norms
+  (``tests/stability/test_lattice.py`` checks them against ``scipy.sparse.linalg.norm``).
+* ``shift_invert.polish`` (c1e7168): reusing the search's factor at ``sigma`` with
+  shift-invert steps of the first-order pencil gave the same vectors to 1e-15 but took 5-13
+  steps where one LU of ``Q(lambda)`` and three solves do, and the kept factors cost memory.
+* ``search.WARM_STEPS`` (0e988ce): a first checkpoint at 4 steps for a search started from
+  the previous speed's vectors halves the order-1 Arnoldi time (0.055 -> 0.026 s); a
+  coarse-to-fine warm start gained nothing from it.
+* ``search.STALL_CHECKPOINT`` (527de51): before it, the 10 cold searches that could not meet
+  their quota with centred copies ran to 54 steps: 0.70 of 0.93 s of Arnoldi at order 2; the
+  verdict went from 3.05 to 2.7 s with the same exponents.
+* ``continuation.TRACK_POLISH`` (eba328d): from one speed to the next of a run-up, the
+  averaged shift predicts the exponents to 0.1-4 rad/s; one polish then leaves a backward
+  error of 1e-10 to 1e-9 on some.
+* ``representatives.Settler`` (28e5e98): a result holding a settler that holds the result (a
+  reference cycle) keeps the finer lattices' operators and PARDISO factors alive until a full
+  garbage collection: 2 GB per worker over the 1000-speed run-up (``bench/sweep.py --full``).
+* ``api.DEFAULT_LATTICE_ORDER`` (f615442): order 1 decides the gearbox in 1.0 s against
+  2.4 s at order 2, the same verdict and largest real part to 1e-11 (section (b) of this
+  bench).
+* ``api._single_thread_blas`` (96d8b06): the lattice kernels are many small products; with
+  two BLAS threads the verdict took twice as long.
+* ``averaged.STANDARD_COND`` (9a1373b): the time-averaged modes by ``B^-1 A`` take 0.05 s
+  against 0.25 s by QZ (252 x 252).
+* ``averaged._from_modal`` (7f3c79b): taking the averaged modes from a modal solve's
+  decomposition of the same system costs 8.5 ms instead of 23 ms per verdict.
+* ``averaged.Averaged.gershgorin`` (4c163ab): the radii on the couplings' nonzero rows and
+  columns only are 4x faster than on the whole modal transform.
+* ``checks.Outer.estimate`` (012d1ee): a third of the outer harmonics are exact zeros of one
+  of the couplings; only those both couplings reach are summed.
 """
 
 from __future__ import annotations

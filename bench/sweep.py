@@ -17,7 +17,9 @@ What it measures (2 cores unless the machine has more):
 4. Dask's overhead per task (no-op tasks through the same executor as the study) and the
    client's cost of writing one chunk file;
 5. the chunk store: one NetCDF file per chunk (what rheolin uses) against one Zarr store
-   (region writes plus a done-marker per chunk), on gearbox-sized chunks.
+   (region writes plus a done-marker per chunk), on gearbox-sized chunks; reading them all
+   back is what :class:`rheolin.study.store.CheckpointStore` saves by keeping the chunks a run
+   wrote to assemble its ``sweep.nc``.
 
 Usage::
 

@@ -164,16 +164,17 @@ def probe(system, H, rtol: float, backend: str) -> dict:  # type: ignore[no-unty
     rest of two periods: a lower bound (the detector needs at least two periods).
     """
     import rheolin.solvers.transient as tr
-    import rheolin.solvers.transient.backends as be
     from rheolin.harmonics.balance import HarmonicBalance
     from rheolin.solvers.registry import Options
+    from rheolin.solvers.transient.backends import run_scipy, run_sundae
+    from rheolin.solvers.transient.model import Coefficients
 
     op = HarmonicBalance(system, H)
     s = tr.TransientSettings.from_options(op, Options(extra={"rtol": rtol, "backend": backend}))
     det = _Probe(PROBE)
     t0 = time.perf_counter()
-    run = be._run_sundae if backend == "sundae" else be._run_scipy
-    stats = run(tr._Coefficients(system), s, det)  # type: ignore[arg-type]
+    run = run_sundae if backend == "sundae" else run_scipy
+    stats = run(Coefficients(system), s, det)  # type: ignore[arg-type]
     if "failed" in stats or not det.done:
         return {"error": stats.get("failed", "probe did not reach its end")}
     needed = 2 * s.period  # the detector's minimum: two full periods

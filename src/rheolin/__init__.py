@@ -14,7 +14,7 @@ from .errors import ModelError
 from .floquet import FloquetResult, floquet
 from .harmonics.sets import HarmonicSet, TruncationWarning
 from .mechanics import Assembled, Model
-from .mechanics.preload.equilibrium import OperatingPoint, operating_point
+from .mechanics.preload import OperatingPoint, operating_point
 from .solvers import METHODS, solve
 from .solvers.solution import STATUS, Solution
 from .system.periodic import PeriodicSystem

@@ -7,6 +7,7 @@ import json
 import os
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -199,6 +200,19 @@ def test_example_validate_and_bad_options(tmp_path):
         res = cli(command, "--help")
         assert res.returncode == 0 and "Usage" in res.stdout
     assert "Exit codes" in cli("--help").stdout
+
+
+def test_version_option_and_command_print_the_project_version():
+    """``rheolin --version`` and ``rheolin version`` print pyproject.toml's version, exit 0."""
+    project = tomllib.loads((Path(__file__).parents[2] / "pyproject.toml").read_text())
+    expected = project["project"]["version"]
+    res = cli("--version")
+    assert (res.returncode, res.stdout, res.stderr) == (0, f"rheolin {expected}\n", "")
+    res = cli("version")
+    assert (res.returncode, res.stdout) == (0, f"{expected}\n")
+    res = cli("--version", "run", "no-such-file.toml")  # eager: the command is not run
+    assert (res.returncode, res.stdout, res.stderr) == (0, f"rheolin {expected}\n", "")
+    assert "--version" in cli("--help").stdout
 
 
 def test_sweep_writes_results_over_speed(tmp_path):

@@ -25,7 +25,7 @@ import pytest
 from test_time_domain import varying_2dof, varying_3dof
 
 import rheolin as rl
-import rheolin.solvers.transient.method as tr  # registers "transient" (until solve.py imports it)
+import rheolin.solvers.transient.settings as tr
 from rheolin.mechanics import Model
 
 BACKENDS = [

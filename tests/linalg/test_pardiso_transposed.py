@@ -39,7 +39,9 @@ def test_transposed_solves_solve_the_transposed_system(trans):
 
 
 def test_lattice_factor_in_a_new_thread_context():
-    from rheolin.floquet.search import _pardiso_factor
+    import rheolin as rl
+    from rheolin.floquet.shift_invert import pardiso_factor
+    from rheolin.harmonics import LatticeHill
 
     # a 2-D grid operator (little fill) above the lattice's PARDISO threshold of 8,000
     m = 95
@@ -47,10 +49,11 @@ def test_lattice_factor_in_a_new_thread_context():
     A = sp.csc_array(sp.kronsum(T, T))
     A.sort_indices()
     b = np.ones(A.shape[0], dtype=complex)
-    for _ in range(2):  # a new lattice (holder) per context, as one Floquet call each
-        holder = type("Hill", (), {})()
+    one = rl.PeriodicSystem(1.0, M={0: np.eye(1)}, K={0: np.eye(1)})
+    for _ in range(2):  # a new lattice (its analysis) per context, as one Floquet call each
+        holder = LatticeHill(one, np.array([0]))
         with threadpool_limits(1):
-            f = _pardiso_factor(holder, A)
+            f = pardiso_factor(holder, A)
             assert f is not None
             x = f.solve(b)
         assert np.linalg.norm(A @ x - b) <= 1e-12 * np.linalg.norm(b)

@@ -105,7 +105,7 @@ def test_standstill_modes_are_the_non_spinning_closed_form() -> None:
         assert np.sum(np.abs(f0 / ref - 1) < 1e-8) == 2, (ref, f0)
     with pytest.raises(ValueError, match=">= 0"):
         campbell(_overhung(), np.array([-1.0, 500.0]))
-    from rheolin.cli.report import parse_speeds
+    from rheolin.cli.parse import parse_speeds
 
     assert parse_speeds("0:1000:500rpm", allow_zero=True)[0] == 0.0
 

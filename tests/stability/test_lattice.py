@@ -361,7 +361,7 @@ def test_error_bound_norms_equal_those_of_the_assembled_pencil(k_scale: float, w
     from rheolin.harmonics.hill import state_scaling
     from rheolin.harmonics.hill_lattice import LatticeHill
 
-    search = importlib.import_module("rheolin.floquet.search")
+    kernel = importlib.import_module("rheolin.floquet.shift_invert")
     rng = np.random.default_rng(3)
     n = 4
 
@@ -380,7 +380,7 @@ def test_error_bound_norms_equal_those_of_the_assembled_pencil(k_scale: float, w
     for order in (1, 2):
         H = system_lattice(s, order).indices
         A, B = hill_pencil(s, H)
-        normA, normB = search._pencil_norms(LatticeHill(s, H), sq, sv)
+        normA, normB = kernel.pencil_norms(LatticeHill(s, H), sq, sv)
         assert normA == pytest.approx(spla.norm(A, 1), rel=1e-13)
         assert normB == pytest.approx(spla.norm(B, 1), rel=1e-13)
 
@@ -591,7 +591,7 @@ def test_averaged_modes_from_the_modal_solve() -> None:
     exponents equal the eigenvalues of the first-order state matrix (NumPy, from M, D, K),
     the left and right vectors are eigenvectors of the balanced pencil and biorthonormal,
     and the verdict equals the one without the decomposition."""
-    from rheolin.floquet.averaged import _Averaged, _averaged_pencil
+    from rheolin.floquet.averaged import Averaged, averaged_pencil
 
     rng = np.random.default_rng(3)
     n = 6
@@ -608,21 +608,21 @@ def test_averaged_modes_from_the_modal_solve() -> None:
     f[0] = 1.0
     s = rl.PeriodicSystem(3.0, M={0: M}, D={0: D}, K={0: K, 1: Kk, -1: Kk}, f={1: f})
     sol = rl.solve(s, 12, backend="modal", method="gmres", stability=False)
-    assert sol.success and "_averaged_decomposition" in s.__dict__
-    avg = _Averaged(s)
+    assert sol.success and s.kept("averaged_decomposition") is not None
+    avg = Averaged(s)
     state = np.block(
         [[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, D)]]
     )
     ref = np.linalg.eigvals(state)
     assert max(np.min(np.abs(ref - z)) / abs(z) for z in avg.lam) < 1e-12
     assert max(np.min(np.abs(avg.lam - z)) / abs(z) for z in ref) < 1e-12
-    Ad, Bd, _ = _averaged_pencil(s, avg.sq, avg.sv)
+    Ad, Bd, _ = averaged_pencil(s, avg.sq, avg.sv)
     assert np.max(np.abs(Ad @ avg.X - (Bd @ avg.X) * avg.lam)) < 1e-10 * np.abs(Ad).max()
     Wh = avg.W.conj().T
     assert np.max(np.abs(Wh @ Ad - avg.lam[:, None] * (Wh @ Bd))) < 1e-10 * np.abs(Ad).max()
     assert np.max(np.abs(avg.WB @ avg.X - np.eye(2 * n))) < 1e-12
     with_modes = rl.floquet(s, method="lattice", order=3)
-    del s.__dict__["_averaged_decomposition"]
+    s.keep("averaged_decomposition", None)
     without = rl.floquet(s, method="lattice", order=3)
     assert with_modes.decided and with_modes.stable == without.stable
     assert abs(with_modes.max_real - without.max_real) <= 1e-9 * abs(without.max_real)

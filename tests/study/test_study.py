@@ -12,7 +12,7 @@ import pytest
 import xarray as xr
 from threadpoolctl import threadpool_limits
 
-from rheolin.cli.report import parse_speeds
+from rheolin.cli.parse import parse_speeds
 from rheolin.results import solve_point
 from rheolin.results.sweep import sweep_speeds
 from rheolin.study import (

@@ -10,11 +10,13 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
+from .common import MODEL, OUT, console, fail, load, output_dir
+from .errors import err, set_kept, sigterm_as_interrupt
+
 __all__ = ["critical_map", "register"]
 
 MAP_FILES = {"critical_map.nc", "critical_map.png"}
 
-MODEL = typer.Argument(..., help="Model file (TOML, see docs/model-format.md).")
 STIFFNESS = typer.Option(
     "1e5:1e10:26", help="start:stop:count, log-spaced, e.g. '1e5:1e10:26 N/m'."
 )
@@ -22,26 +24,24 @@ BEARING = typer.Option(
     None, "--bearing", help="A bearing to vary (repeatable; default: every bearing to ground)."
 )
 COUNT = typer.Option(4, help="How many critical speeds per stiffness.")
-OUT = typer.Option(None, "--out", "-o", help="Output directory (created).")
 
 _RANGE = re.compile(r"^\s*([-+0-9.eE]+)\s*:\s*([-+0-9.eE]+)\s*:\s*([0-9]+)\s*(.*)$")
 
 
 def _stiffness(text: str) -> np.ndarray:
     from ..io.units import UnitError, to_si
-    from .app import _fail
 
     m = _RANGE.match(text)
     if not m:
-        raise _fail(f"--stiffness: write start:stop:count, e.g. '1e5:1e10:26 N/m', got {text!r}")
+        raise fail(f"--stiffness: write start:stop:count, e.g. '1e5:1e10:26 N/m', got {text!r}")
     unit = m.group(4).strip() or "N/m"
     try:
         lo, hi = (to_si(f"{m.group(i)} {unit}", "stiffness") for i in (1, 2))
     except (UnitError, ValueError) as exc:
-        raise _fail(f"--stiffness: {exc}") from None
+        raise fail(f"--stiffness: {exc}") from None
     count = int(m.group(3))
     if not (0 < lo < hi and 2 <= count <= 1000):
-        raise _fail(f"--stiffness: need 0 < start < stop and 2 <= count <= 1000, got {text!r}")
+        raise fail(f"--stiffness: need 0 < start < stop and 2 <= count <= 1000, got {text!r}")
     return np.logspace(np.log10(lo), np.log10(hi), count)
 
 
@@ -60,20 +60,18 @@ def critical_map(
     from ..plots.campbell import plot_critical_map
     from ..results.dataset import write_dataset
     from ..stability.critical_map import critical_speed_map, synchronous_critical_speeds
-    from .app import _fail, _load, _out_dir, console
-    from .errors import err, set_kept, sigterm_as_interrupt
 
-    lm = _load(model)
+    lm = load(model)
     k = _stiffness(stiffness)
     if count < 1:
-        raise _fail(f"--count: must be >= 1, got {count}")
-    out_dir = _out_dir(out, f"{model.stem}_critical_map")
+        raise fail(f"--count: must be >= 1, got {count}")
+    out_dir = output_dir(out, f"{model.stem}_critical_map")
     set_kept(f"nothing written; {out_dir} is unchanged")
     with sigterm_as_interrupt(), err.status(f"critical speeds at {k.size} stiffness values"):
         try:
             result = critical_speed_map(lm.model, k, bearings=bearings or None, n_modes=count)
         except ModelError as exc:
-            raise _fail(f"--bearing: {exc}" if "bearing" in str(exc) else str(exc)) from None
+            raise fail(f"--bearing: {exc}" if "bearing" in str(exc) else str(exc)) from None
         own = synchronous_critical_speeds(lm.model, count)
     with sigterm_as_interrupt(), staged_output(out_dir, MAP_FILES) as stage:
         write_dataset(result.to_dataset(), stage / "critical_map.nc")

@@ -9,6 +9,10 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
+from .common import MODEL, OUT, console, fail, load, output_dir, stability_flag
+from .errors import EXIT_FAILED, err, set_kept, sigterm_as_interrupt
+from .parse import parse_speed, parse_speeds
+
 __all__ = ["frf", "register"]
 
 FRF_FILES = {"frf.nc", "bode.png"}
@@ -16,7 +20,6 @@ FRF_FILES = {"frf.nc", "bode.png"}
 #: Peaks below this share of a pair's largest magnitude are not listed.
 PEAK_SHARE = 0.01
 
-MODEL = typer.Argument(..., help="Model file (TOML, see docs/model-format.md).")
 SPEED = typer.Option(..., help="Input speed, e.g. 3000rpm.")
 FREQUENCIES = typer.Option(
     ..., help="Excitation frequencies start:stop:step with unit, e.g. 1:500:0.5Hz."
@@ -36,7 +39,6 @@ UNBALANCE = typer.Option(
 STABILITY = typer.Option(
     "auto", help="Floquet check at the speed: auto (when it fits), on, off.", case_sensitive=False
 )
-OUT = typer.Option(None, "--out", "-o", help="Output directory (created).")
 
 
 def frf(
@@ -59,24 +61,21 @@ def frf(
     from ..results.api684 import amplification_factors
     from ..results.dataset import write_dataset
     from ..results.frf import frequency_response, parse_dof
-    from .app import _fail, _load, _out_dir, _stability_flag, console
-    from .errors import EXIT_FAILED, err, set_kept, sigterm_as_interrupt
-    from .report import parse_speed, parse_speeds
 
-    lm = _load(model)
+    lm = load(model)
     w_speed = parse_speed(speed)
     w = parse_speeds(frequencies, "--frequencies", allow_zero=True)
-    flag = _stability_flag(stability)
+    flag = stability_flag(stability)
     if order is not None and order < 0:
-        raise _fail(f"--order: must be >= 0, got {order}")
+        raise fail(f"--order: must be >= 0, got {order}")
     assembled = lm.model.assemble(w_speed)
     for option, dofs in (("--input", inputs), ("--output", outputs or [])):
         for d in dofs:
             try:
                 parse_dof(d, assembled.dof_labels)
             except Exception as exc:
-                raise _fail(f"{option}: {exc}") from None
-    out_dir = _out_dir(out, f"{model.stem}_frf")
+                raise fail(f"{option}: {exc}") from None
+    out_dir = output_dir(out, f"{model.stem}_frf")
     set_kept(f"nothing written; {out_dir} is unchanged")
     with sigterm_as_interrupt():
         with err.status(f"frequency response over {w.size} frequencies"):

@@ -9,14 +9,16 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
+from .common import MODEL, OUT, console, fail, load, output_dir
+from .errors import err, set_kept, sigterm_as_interrupt
+from .parse import parse_speeds
+
 __all__ = ["modes", "register"]
 
 MODES_FILES = {"modes.nc", "modes.png"}
 
-MODEL = typer.Argument(..., help="Model file (TOML, see docs/model-format.md).")
 SPEED = typer.Option(..., help="Input speed, e.g. 3000rpm (0: standstill).")
 COUNT = typer.Option(12, help="How many of the lowest modes to list (the first six are drawn).")
-OUT = typer.Option(None, "--out", "-o", help="Output directory (created).")
 
 
 def modes(
@@ -32,16 +34,13 @@ def modes(
     from ..results.dataset import write_dataset
     from ..stability.campbell import STANDSTILL
     from ..stability.modes import averaged_modes, mode_energy, mode_kind, whirl_ratio
-    from .app import _fail, _load, _out_dir, console
-    from .errors import err, set_kept, sigterm_as_interrupt
-    from .report import parse_speeds
 
-    lm = _load(model)
+    lm = load(model)
     (w,) = parse_speeds(speed, "--speed", allow_zero=True)[:1]
     if count < 1:
-        raise _fail(f"--count: must be >= 1, got {count}")
+        raise fail(f"--count: must be >= 1, got {count}")
     W = float(w) if w > 0 else STANDSTILL
-    out_dir = _out_dir(out, f"{model.stem}_modes")
+    out_dir = output_dir(out, f"{model.stem}_modes")
     set_kept(f"nothing written; {out_dir} is unchanged")
     m = lm.model
     with sigterm_as_interrupt(), err.status("modes"):

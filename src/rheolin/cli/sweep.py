@@ -1,4 +1,4 @@
-"""Terminal side of ``rheolin sweep``: the progress bar over the whole study and the summary."""
+"""``rheolin sweep``: the command, the progress bar over the whole study and the summary."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import typer
 from rich.console import Console
 from rich.markup import escape
 from rich.progress import (
@@ -20,17 +21,101 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
+from .common import (
+    HARMONICS,
+    MAX_ORDER,
+    METHOD,
+    MODEL,
+    OUT,
+    RTOL,
+    STABILITY,
+    console,
+    fail,
+    load,
+    output_dir,
+    preflight,
+    show_operating_point,
+    solve_options,
+)
 from .errors import (
     EXIT_FAILED,
     EXIT_INPUT,
     EXIT_INTERRUPTED,
+    err,
     plain_error,
     sigterm_as_interrupt,
 )
+from .parse import parse_speeds
 
-__all__ = ["StudyBar", "print_study_summary", "run_sweep"]
+__all__ = ["StudyBar", "map_counts", "print_study_summary", "register", "run_sweep", "sweep"]
 
 RPM = 30 / np.pi
+
+VARY = typer.Option(
+    [],
+    "--vary",
+    help="Vary a model parameter: 'PATH=start:stop:count unit' or 'PATH=v1,v2 unit', e.g. "
+    "'bearings.input_A.stiffness=1e8:4e8:7 N/m' (repeat for a grid; docs/studies.md).",
+)
+
+
+def sweep(
+    model: Path = MODEL,
+    speeds: str = typer.Option(..., help="start:stop:step with unit (500:6000:50rpm) or a list."),
+    out: Path = OUT,
+    method: str = METHOD,
+    harmonics: int = HARMONICS,
+    max_order: float = MAX_ORDER,
+    stability: str = STABILITY,
+    rtol: float = RTOL,
+    stability_map: bool = typer.Option(
+        True, help="Also compute the Floquet stability map (stability_map.nc/.png, ranges refined)."
+    ),
+    plots: bool = typer.Option(True, help="Write the plots."),
+    vary: list[str] = VARY,
+    workers: int = typer.Option(
+        None, help="Local worker processes (default: the cores; 1: no Dask, in this process)."
+    ),
+    scheduler: str = typer.Option(
+        None, help="Run on an existing Dask cluster: its scheduler address (tcp://host:8786)."
+    ),
+    chunk_size: int = typer.Option(
+        None, help="Points per task, rounded up to whole continuation blocks (default: adaptive)."
+    ),
+    overwrite: bool = typer.Option(
+        False, help="Replace another study's checkpoint and results in the output directory."
+    ),
+    quantity: str = typer.Option(
+        "response",
+        help="Output of the parameter plots: response, bearing_force, dte, max_floquet_real.",
+    ),
+) -> None:
+    """Solve over speeds (and parameter values, --vary) in parallel on Dask, checkpointed:
+    a re-run of the same command computes only the missing points. Writes DIR/sweep.nc,
+    DIR/sweep.json, plots and (with the map) DIR/stability_map.nc."""
+    from ..plots.study import QUANTITIES
+
+    lm = load(model)
+    opts = solve_options(lm, method, harmonics, max_order, stability, rtol)
+    w = parse_speeds(speeds)
+    if workers is not None and workers < 1:
+        raise fail(f"--workers: must be >= 1, got {workers}")
+    if chunk_size is not None and chunk_size < 1:
+        raise fail(f"--chunk-size: must be >= 1, got {chunk_size}")
+    if quantity not in QUANTITIES:
+        raise fail(f"--quantity: must be one of {sorted(QUANTITIES)}, got {quantity!r}")
+    out_dir = output_dir(out, f"{model.stem}_sweep")
+    preflight(lm, w, opts["order"], opts["max_order"])
+    settings = {
+        **opts,
+        "order": harmonics,  # None: the file's [harmonics] at every grid point
+        "max_order": max_order,
+        "stability_map": stability_map,
+    }
+    show_operating_point(lm.model, float(w[0]), "the first speed, the file's parameters")
+    run = dict(out=out_dir, overwrite=overwrite, workers=workers, chunk_size=chunk_size)
+    code = run_sweep(console, err, model, w, vary, settings, scheduler, run, plots, quantity)
+    raise typer.Exit(code)
 
 
 def run_sweep(
@@ -51,16 +136,16 @@ def run_sweep(
     from ..study import ParameterError, Settings, StudyInterrupted, StudySpec, run_study
     from ..study.files import write_results
 
-    def fail(message: str) -> int:
+    def refuse(message: str) -> int:
         plain_error(message)
         return EXIT_INPUT
 
     try:
         spec = StudySpec.create(model, speeds, list(vary), Settings(**settings))
     except ParameterError as exc:
-        return fail(f"--vary {exc}")
+        return refuse(f"--vary {exc}")
     except ModelError as exc:
-        return fail(str(exc))
+        return refuse(str(exc))
     write = functools.partial(write_results, plots=plots, quantity=quantity)
     try:
         with _client(scheduler) as client, sigterm_as_interrupt(), StudyBar(err, spec) as bar:
@@ -74,7 +159,7 @@ def run_sweep(
         )
         return EXIT_INTERRUPTED
     except ModelError as exc:  # another study in the directory, a busy directory, --scheduler
-        return fail(str(exc))
+        return refuse(str(exc))
     print_study_summary(console, err, result)
     converged = bool((result.dataset["success"] == 1).all())
     return 0 if converged and not map_counts(result)["ranges"] else EXIT_FAILED
@@ -238,3 +323,8 @@ def print_study_summary(console: Console, err: Console, result: Any) -> None:
         err.print(f"warning: {w}", markup=False, highlight=False, soft_wrap=True)
     if result.written:
         console.print("wrote " + ", ".join(str(p) for p in result.written), highlight=False)
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``sweep`` to the ``rheolin`` application."""
+    app.command("sweep")(sweep)

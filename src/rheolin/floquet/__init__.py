@@ -8,7 +8,8 @@ Three paths over the same (balanced) Hill pencil ``lambda B y = A y``:
   frequency range; the adjoint problem gives the left eigenvectors for the same error bound;
 * ``"lattice"``: for systems whose time variation comes from a few generators (gear meshes,
   shafts), the Hill problem on the lattice of their integer combinations, solved near every
-  mode of the time-averaged system (modules ``search``, ``select``, ``checks``, ``confirm``).
+  mode of the time-averaged system (modules ``search``, ``shift_invert``, ``select``,
+  ``representatives``, ``checks``, ``confirm``).
 
 The dense and sparse paths need a dense grid ``-N..N`` (in units of the gcd of its indices);
 any other harmonic set is refused, because their choice of representatives and their
@@ -21,8 +22,10 @@ paths; the lattice path keeps the centred copy.
 
 Modules: ``api`` (the entry point and its choice of truncation), ``result`` (the result and its
 verdict), ``dense``, ``sparse`` and ``common`` (the grid paths), and for the lattice ``averaged``
-(the modes it starts from, its memory), ``search``, ``select``, ``checks``, ``confirm`` and
-``outcome``.
+(the modes it starts from and their Gershgorin discs), ``search`` (the search and its memory),
+``shift_invert`` (its factors, Arnoldi and polish), ``select`` (one representative per
+exponent), ``representatives`` (their bounds and truncation estimates), ``checks``,
+``confirm``, ``continuation`` (over a sweep) and ``outcome``.
 """
 
 from ..harmonics.hill import hill_matrices, hill_pencil
@@ -34,12 +37,12 @@ from .api import (
     floquet,
     floquet_memory,
 )
-from .averaged import MAX_AVERAGED_DENSE, lattice_memory
+from .averaged import MAX_AVERAGED_DENSE
 from .checks import liouville_sum
 from .continuation import Continuation
 from .outcome import LatticeExponents
 from .result import SAFETY, SPLIT_FACTOR, TRUNCATION_SAFETY, FloquetResult
-from .search import lattice_exponents
+from .search import lattice_exponents, lattice_memory
 
 __all__ = [
     "AUTO_DENSE_LIMIT",

@@ -17,13 +17,12 @@ from ..harmonics.lattice import Lattice, harmonic_lattice, system_lattice
 from ..harmonics.sets import HarmonicSet, as_harmonic_set
 from ..system.periodic import PeriodicSystem
 from ..system.rigid_modes import find_rigid_modes
-from .averaged import lattice_memory
 from .confirm import confirm_unresolved
 from .continuation import Continuation
-from .dense import _floquet_dense
-from .result import FloquetResult, _result
-from .search import lattice_exponents
-from .sparse import _floquet_sparse
+from .dense import floquet_dense
+from .result import FloquetResult, floquet_result
+from .search import lattice_exponents, lattice_memory
+from .sparse import floquet_sparse
 
 __all__ = [
     "AUTO_DENSE_LIMIT",
@@ -49,9 +48,8 @@ AUTO_DENSE_LIMIT = 1500
 #: First lattice order of ``floquet(system)``; raised one order at a time, up to
 #: :data:`MAX_AUTO_ORDER`, while the verdict is undecided (and the larger lattice fits the
 #: memory budget). Its unresolved exponents are already continued on orders ``p + 1`` and
-#: ``p + 2`` near them, so the coarse lattice decides most systems: the gearbox at order 1 in
-#: 1.0 s instead of 2.4 s at order 2, the same verdict and largest real part to 1e-11
-#: (bench/stability.py).
+#: ``p + 2`` near them, so the coarse lattice decides most systems, faster than a finer one
+#: and with the same verdict (bench/stability.py, design notes).
 DEFAULT_LATTICE_ORDER = 1
 
 
@@ -97,7 +95,8 @@ def floquet(
         step), because their representatives and truncation test assume one.
     method
         ``"auto"``, ``"dense"`` (all exponents, QZ), ``"sparse"`` (exponents near the
-        imaginary axis, shift-invert) or ``"lattice"`` (module :mod:`rheolin.floquet_lattice`).
+        imaginary axis, shift-invert) or ``"lattice"``
+        (:func:`~rheolin.floquet.lattice_exponents`).
     order
         Lattice order. ``None``: :data:`DEFAULT_LATTICE_ORDER`, raised one order at a time
         up to :data:`MAX_AUTO_ORDER` while the verdict is undecided and the larger lattice
@@ -242,11 +241,11 @@ def _floquet(
             )
         _check_budget(size * size * 16 * 7, budget, "the dense Hill problem", "fewer harmonics")
         with np.errstate(under="ignore"):  # far harmonics of eigenvectors underflow harmlessly
-            return _floquet_dense(system, hset)
+            return floquet_dense(system, hset)
     if isinstance(k, bool) or int(k) < 1:
         raise ValueError(f"`k` must be a positive integer, got {k!r}")
     with np.errstate(under="ignore"):
-        return _floquet_sparse(system, hset, frequencies, int(k), int(max_shifts))
+        return floquet_sparse(system, hset, frequencies, int(k), int(max_shifts))
 
 
 def _dense_order(system: PeriodicSystem) -> int:
@@ -394,7 +393,7 @@ def _floquet_lattice(
             out.settle(out, np.flatnonzero(np.isnan(out.truncation)))
             out.settle = None  # it holds the lattice's operators
     w = system.omega
-    res = _result(out.exponents, out.bounds, out.edge, w, "lattice", info=out.info)
+    res = floquet_result(out.exponents, out.bounds, out.edge, w, "lattice", info=out.info)
     order = np.argsort(-out.exponents.real, kind="stable")
     res.truncation = out.truncation[order]
     res.info["order"] = out.order[order]
@@ -432,7 +431,7 @@ def _finer(system: PeriodicSystem, lattice: Lattice) -> Lattice | None:
 
 class _single_thread_blas:
     """Limit BLAS to one thread: the lattice kernels are many small products, where
-    threads cost more than they bring (2x slower on the gearbox with two)."""
+    threads cost more than they bring (bench/stability.py, design notes)."""
 
     def __enter__(self) -> None:
         try:

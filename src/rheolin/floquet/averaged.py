@@ -1,17 +1,18 @@
-"""The time-averaged modes a lattice search starts from, and the memory a lattice search needs."""
+"""The time-averaged modes a lattice search starts from, and the Gershgorin discs of those
+modes in the Hill matrix of the infinite lattice."""
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 import scipy.linalg as sla
 
-from ..harmonics.balance import coefficient_blocks
-from ..harmonics.hill import _dense, state_scaling
-from ..harmonics.lattice import Lattice
+from ..harmonics.hill import dense, scaled_entries, state_scaling
 from ..system.periodic import PeriodicSystem
-from .result import _EPS
+from .result import EPS
 
-__all__ = ["LU_FILL", "MAX_AVERAGED_DENSE", "lattice_memory"]
+__all__ = ["MAX_AVERAGED_DENSE"]
 
 
 #: Dense eigen-decomposition of the time-averaged pencil up to this size (``2 n``).
@@ -19,16 +20,12 @@ MAX_AVERAGED_DENSE = 4000
 
 
 #: Below this condition number of the balanced ``B`` the pencil is reduced to the standard
-#: problem ``B^-1 A`` (5x faster than QZ on the gearbox, 252 x 252: 0.05 s against 0.25 s);
-#: above it (massless DOFs: ``B`` singular) QZ keeps the infinite eigenvalues apart.
+#: problem ``B^-1 A``, faster than QZ (bench/stability.py, design notes); above it (massless
+#: DOFs: ``B`` singular) QZ keeps the infinite eigenvalues apart.
 STANDARD_COND = 1e6
 
 
-#: Estimated LU fill of the lattice operator (entries of the factors / entries of ``Q``).
-LU_FILL = 12.0
-
-
-class _Averaged:
+class Averaged:
     """Eigen-decomposition of the time-averaged balanced pencil (first-order, ``2 n``)."""
 
     def __init__(self, system: PeriodicSystem) -> None:
@@ -40,11 +37,11 @@ class _Averaged:
                 "(condensed bodies) or give a dense harmonic set with method='sparse'"
             )
         self.sq, self.sv = sq, sv = state_scaling(system)
-        Ad, Bd, Ms = _averaged_pencil(system, sq, sv)
+        Ad, Bd, Ms = averaged_pencil(system, sq, sv)
         # cond(B) from the balanced mass block (B = diag(I, M))
         mu = np.linalg.svd(Ms, compute_uv=False) if n else np.ones(1)
         hi, lo = max(float(mu.max()), 1.0), min(float(mu.min()), 1.0)
-        known = system.__dict__.get("_averaged_decomposition")
+        known = system.kept("averaged_decomposition")
         if known is not None and lo > 0 and hi / lo <= STANDARD_COND and Ad.dtype == float:
             lam, X, W = _from_modal(known, sq, sv)
         elif lo > 0 and hi / lo <= STANDARD_COND:
@@ -62,7 +59,7 @@ class _Averaged:
         X, W = X[:, finite], W[:, finite]
         X = X / np.linalg.norm(X, axis=0)
         d = np.einsum("ij,ij->j", W.conj(), Bd @ X)
-        ok = np.abs(d) > 1e3 * _EPS * np.linalg.norm(W, axis=0)
+        ok = np.abs(d) > 1e3 * EPS * np.linalg.norm(W, axis=0)
         self.W = W / np.where(ok, d, 1.0).conj()
         self.X = X
         self.WB = self.W.conj().T @ Bd  # modal coordinates of a balanced vector: WB @ y
@@ -70,9 +67,29 @@ class _Averaged:
         # as the double zero of a free rotation): copies of it scatter by as much
         normA, normB = np.linalg.norm(Ad, 1), np.linalg.norm(Bd, 1)
         cond = np.linalg.norm(self.W, axis=0) / np.maximum(np.abs(d), np.finfo(float).tiny)
-        self.bound = _EPS * (normA + np.abs(self.lam) * normB) * np.where(ok, cond, np.inf)
+        self.bound = EPS * (normA + np.abs(self.lam) * normB) * np.where(ok, cond, np.inf)
         self.modal = bool(ok.all()) and self.lam.size == 2 * n
         self.n = n
+        # the balanced couplings of a system and each mode's Gershgorin radius, kept for
+        # :meth:`gershgorin` (they do not depend on the lattice: a finer lattice's
+        # confirmation asks again for the modes it settles)
+        self._gershgorin: tuple[PeriodicSystem, list[tuple[Any, ...]], dict[int, float]] | None
+        self._gershgorin = None
+
+    def gershgorin(self, system: PeriodicSystem, modes: list[int]) -> list[float]:
+        """Gershgorin radii of time-averaged modes in the modal Hill matrix of the infinite
+        lattice: ``sum_k sum_m |w_j^H E_k x_m|`` over every coefficient harmonic ``k`` (rows
+        of the balanced first-order coupling in modal coordinates, ``M_k`` at the row's local
+        frequency ``lambda_j - i k w1``). Every Hill exponent lies in the union of the discs
+        of radius ``R_j`` about the copies ``lambda_j - i h w1``, for any truncation."""
+        cache = self._gershgorin
+        if cache is None or cache[0] is not system:
+            cache = self._gershgorin = (system, _coupling_terms(system, self), {})
+        _, terms, known = cache
+        missing = sorted({int(m) for m in modes if int(m) not in known})
+        if missing:
+            known.update(zip(missing, _radii(system, self, terms, missing), strict=True))
+        return [known[int(m)] for m in modes]
 
 
 def _from_modal(
@@ -81,7 +98,7 @@ def _from_modal(
     """Eigenvalues, right and left eigenvectors of the balanced pencil from the decomposition
     a modal solve made of the same time-averaged system (:class:`rheolin.linalg.ModalInverse`:
     ``H = V diag(lam) V^-1`` in ``x = (L_K^T q, L_M^T v)``), without a second eigenvalue
-    problem (13 ms of the gearbox's verdict per speed).
+    problem (bench/stability.py, design notes).
 
     The balanced state ``y = (S_q q, S_v v) = T x`` with ``T = diag(S_q L_K^-T, S_v L_M^-T)``
     has ``B^-1 A = T H T^-1``: right vectors ``T V``, left ones (of ``B^-1 A``) the rows of
@@ -95,7 +112,7 @@ def _from_modal(
     return lam, X, WH.conj().T
 
 
-def _averaged_pencil(
+def averaged_pencil(
     system: PeriodicSystem, sq: np.ndarray, sv: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The balanced time-averaged pencil ``(A, B)`` of :func:`rheolin.harmonics.hill.hill_pencil` on
@@ -104,11 +121,11 @@ def _averaged_pencil(
     ``M = S_v^-1 M_0 S_v^-1``."""
     n = system.n
 
-    def dense(table: dict, right: np.ndarray) -> np.ndarray:
+    def block(table: dict, right: np.ndarray) -> np.ndarray:
         x = table.get(0)
-        return np.zeros((n, n)) if x is None else _dense(x) / sv[:, None] / right[None, :]
+        return np.zeros((n, n)) if x is None else dense(x) / sv[:, None] / right[None, :]
 
-    Ks, Ds, Ms = dense(system.K, sq), dense(system.D, sv), dense(system.M, sv)
+    Ks, Ds, Ms = block(system.K, sq), block(system.D, sv), block(system.M, sv)
     # real coefficients (the usual case): a real eigenproblem, whose complex exponents come
     # in exact conjugate pairs
     dtype = np.result_type(Ks, Ds, Ms, float)
@@ -122,26 +139,61 @@ def _averaged_pencil(
     return A, B, Ms
 
 
-def lattice_memory(system: PeriodicSystem, lattice: Lattice, k: int = 8) -> int:
-    """Estimated peak memory [bytes] of :func:`lattice_exponents` on ``lattice``.
+def _coupling_terms(system: PeriodicSystem, avg: Averaged) -> list[tuple[Any, ...]]:
+    """Per coefficient harmonic ``k``: ``(k, *_compact(...))`` of the balanced couplings."""
+    iq, iv = 1.0 / avg.sq, 1.0 / avg.sv
+    terms = []
+    for k in system.coefficient_harmonics:
+        mats = [
+            None if x is None else scaled_entries(x, iv, right)
+            for x, right in ((system.K.get(k), iq), (system.D.get(k), iv), (system.M.get(k), iv))
+        ]
+        terms.append((k, *_compact(mats)))
+    return terms
 
-    Counted without building anything: the entries of the lattice operator (from the block
-    patterns and the number of harmonic pairs each coefficient harmonic couples), its LU at
-    :data:`LU_FILL` times those entries, the Arnoldi basis, and the dense averaged modes.
-    """
-    H = lattice.indices
-    n = system.n
-    nnz = 0
-    for k_h, block in coefficient_blocks(system).items():
-        pos = np.minimum(np.searchsorted(H, H + k_h), H.size - 1)
-        pairs = int(np.count_nonzero(H[pos] == H + k_h))
-        if not pairs:
+
+def _radii(
+    system: PeriodicSystem, avg: Averaged, terms: list[tuple[Any, ...]], modes: list[int]
+) -> list[float]:
+    """The radii of :meth:`Averaged.gershgorin`, computed."""
+    n, w = system.n, system.omega
+    Wr = avg.W[:, modes].conj().T  # rows of the modal transform
+    out = np.zeros(len(modes))
+    low = Wr[:, n:]  # the couplings act on the v rows
+    for k, rows, cq, cv, Kc, Dc, Mc in terms:
+        if rows.size == 0:
             continue
-        nnz += pairs * int(block.entries()[0].size)
-    from .search import ARNOLDI_STEPS
+        lr = low[:, rows]
+        # the couplings touch a few DOFs (a gear mesh's): only those rows of the modal
+        # transform enter, the rest of ``w_j^H E_k`` is zero
+        total = np.zeros((len(modes), avg.X.shape[1]), dtype=complex)
+        if Kc is not None:
+            total += (lr @ Kc) @ avg.X[cq]
+        if Dc is not None or Mc is not None:
+            pv = lr @ Dc if Dc is not None else 0.0
+            if Mc is not None:
+                s = avg.lam[modes] - 1j * k * w
+                pv = pv + s[:, None] * (lr @ Mc)
+            total += pv @ avg.X[n + cv]
+        out += np.abs(total).sum(axis=1)
+    return out.tolist()
 
-    size2 = 2 * n * H.size
-    ncv = max(2 * k + 1, ARNOLDI_STEPS[-1] + 1)  # the Arnoldi basis (no restarts)
-    return int(
-        nnz * 16 * (6 + LU_FILL) + size2 * 16 * (ncv + 8) + (2 * n) ** 2 * 16 * 6 + 64 * 2**20
-    )
+
+def _compact(mats: list[Any]) -> tuple[Any, ...]:
+    """``(rows, q columns, v columns, K, D, M)``: the coupling matrices (entries from
+    :func:`~rheolin.harmonics.hill.scaled_entries`, None where absent) as dense blocks on
+    their nonzero rows and columns (K on the q columns, D and M on the v columns)."""
+    none = np.zeros(0, dtype=np.int64)
+    K, D, M = mats
+    rows = np.unique(np.concatenate([a[0] for a in mats if a is not None] + [none]))
+    cq = np.unique(K[1]) if K is not None else none
+    cv = np.unique(np.concatenate([a[1] for a in (D, M) if a is not None] + [none]))
+
+    def block(a: Any, cols: np.ndarray) -> np.ndarray | None:
+        if a is None:
+            return None
+        out = np.zeros((rows.size, cols.size), dtype=complex)
+        np.add.at(out, (np.searchsorted(rows, a[0]), np.searchsorted(cols, a[1])), a[2])
+        return out
+
+    return rows, cq, cv, block(K, cq), block(D, cv), block(M, cv)

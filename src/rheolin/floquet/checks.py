@@ -1,29 +1,28 @@
-"""Checks of a lattice result: truncation estimate, Gershgorin discs, split gaps, Liouville's
-identity.
+"""Checks of a lattice result: truncation estimate, split gaps, Liouville's identity, and
+agreement between two truncations (the Gershgorin discs are the averaged modes':
+:meth:`~rheolin.floquet.averaged.Averaged.gershgorin`).
 """
 
 from __future__ import annotations
-
-from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..harmonics.hill import _dense, scaled_entries
+from ..harmonics.hill import dense
 from ..harmonics.hill_lattice import LatticeHill
 from ..system.periodic import PeriodicSystem
-from .averaged import MAX_AVERAGED_DENSE, _Averaged
+from .averaged import MAX_AVERAGED_DENSE, Averaged
 from .outcome import LatticeExponents
 from .result import TRUNCATION_SAFETY
 
 __all__ = ["liouville_sum"]
 
 
-class _Outer:
+class Outer:
     """Second-order truncation correction from the harmonics just outside the lattice."""
 
-    def __init__(self, hill: LatticeHill, avg: _Averaged) -> None:
+    def __init__(self, hill: LatticeHill, avg: Averaged) -> None:
         self.hill = hill
         self.avg = avg
         self.O, self.oi, self.io = hill.outer()
@@ -48,8 +47,8 @@ class _Outer:
         s_o = lam + 1j * w * self.O.astype(float)
         if self.avg.modal:
             ac, rr = a[:, self.cols], r[:, self.rows]
-            # outer harmonics that both couplings reach (a third of them are exact zeros on
-            # the gearbox: they add nothing)
+            # only the outer harmonics that both couplings reach: the others are exact
+            # zeros, which add nothing (bench/stability.py, design notes)
             both = np.flatnonzero(np.any(ac != 0, axis=1) & np.any(rr != 0, axis=1))
             Ga = ac[both] @ self.Xq
             Gr = rr[both] @ self.Wv
@@ -79,87 +78,7 @@ class _Outer:
         return total
 
 
-def _gershgorin(system: PeriodicSystem, avg: _Averaged, modes: list[int]) -> list[float]:
-    """Gershgorin radii of time-averaged modes in the modal Hill matrix of the infinite
-    lattice: ``sum_k sum_m |w_j^H E_k x_m|`` over every coefficient harmonic ``k`` (rows of
-    the balanced first-order coupling in modal coordinates, ``M_k`` at the row's local
-    frequency ``lambda_j - i k w1``). Every Hill exponent lies in the union of the discs of
-    radius ``R_j`` about the copies ``lambda_j - i h w1``, for any truncation."""
-    # kept on ``avg``: the balanced couplings, and each mode's radius (it does not depend on
-    # the lattice; a finer lattice's confirmation asks again for the modes it settles)
-    cache = getattr(avg, "_gershgorin", None)
-    if cache is None or cache[0] is not system:
-        radii: dict[int, float] = {}
-        cache = (system, _coupling_terms(system, avg), radii)
-        avg._gershgorin = cache  # type: ignore[attr-defined]
-    _, terms, known = cache
-    missing = sorted({int(m) for m in modes if int(m) not in known})
-    if missing:
-        known.update(zip(missing, _radii(system, avg, terms, missing), strict=True))
-    return [known[int(m)] for m in modes]
-
-
-def _coupling_terms(system: PeriodicSystem, avg: _Averaged) -> list[tuple[Any, ...]]:
-    """Per coefficient harmonic ``k``: ``(k, *_compact(...))`` of the balanced couplings."""
-    iq, iv = 1.0 / avg.sq, 1.0 / avg.sv
-    terms = []
-    for k in system.coefficient_harmonics:
-        mats = [
-            None if x is None else scaled_entries(x, iv, right)
-            for x, right in ((system.K.get(k), iq), (system.D.get(k), iv), (system.M.get(k), iv))
-        ]
-        terms.append((k, *_compact(mats)))
-    return terms
-
-
-def _radii(
-    system: PeriodicSystem, avg: _Averaged, terms: list[tuple[Any, ...]], modes: list[int]
-) -> list[float]:
-    """The radii of :func:`_gershgorin`, computed."""
-    n, w = system.n, system.omega
-    Wr = avg.W[:, modes].conj().T  # rows of the modal transform
-    out = np.zeros(len(modes))
-    low = Wr[:, n:]  # the couplings act on the v rows
-    for k, rows, cq, cv, Kc, Dc, Mc in terms:
-        if rows.size == 0:
-            continue
-        lr = low[:, rows]
-        # the couplings touch a few DOFs (a gear mesh's): only those rows of the modal
-        # transform enter, the rest of ``w_j^H E_k`` is zero (4x faster on the gearbox)
-        total = np.zeros((len(modes), avg.X.shape[1]), dtype=complex)
-        if Kc is not None:
-            total += (lr @ Kc) @ avg.X[cq]
-        if Dc is not None or Mc is not None:
-            pv = lr @ Dc if Dc is not None else 0.0
-            if Mc is not None:
-                s = avg.lam[modes] - 1j * k * w
-                pv = pv + s[:, None] * (lr @ Mc)
-            total += pv @ avg.X[n + cv]
-        out += np.abs(total).sum(axis=1)
-    return out.tolist()
-
-
-def _compact(mats: list[Any]) -> tuple[Any, ...]:
-    """``(rows, q columns, v columns, K, D, M)``: the coupling matrices (entries from
-    :func:`~rheolin.harmonics.hill.scaled_entries`, None where absent) as dense blocks on
-    their nonzero rows and columns (K on the q columns, D and M on the v columns)."""
-    none = np.zeros(0, dtype=np.int64)
-    K, D, M = mats
-    rows = np.unique(np.concatenate([a[0] for a in mats if a is not None] + [none]))
-    cq = np.unique(K[1]) if K is not None else none
-    cv = np.unique(np.concatenate([a[1] for a in (D, M) if a is not None] + [none]))
-
-    def block(a: Any, cols: np.ndarray) -> np.ndarray | None:
-        if a is None:
-            return None
-        out = np.zeros((rows.size, cols.size), dtype=complex)
-        np.add.at(out, (np.searchsorted(rows, a[0]), np.searchsorted(cols, a[1])), a[2])
-        return out
-
-    return rows, cq, cv, block(K, cq), block(D, cv), block(M, cv)
-
-
-def _split_gaps(lam: np.ndarray, H: np.ndarray, w: float) -> np.ndarray:
+def split_gaps(lam: np.ndarray, H: np.ndarray, w: float) -> np.ndarray:
     """Distance of each exponent to the nearest copy of its conjugate at a lattice shift
     (``|2 Im lambda - h w1|``, ``h`` in the lattice): where a complex pair can collide with it
     and split into two exponents of different real parts. Zero for locked (self-conjugate)
@@ -196,7 +115,6 @@ def liouville_sum(system: PeriodicSystem) -> tuple[float, float]:
     if M0 is None or n > MAX_AVERAGED_DENSE // 2:
         return float("nan"), float("inf")
 
-    dense = _dense
     try:
         Minv = np.linalg.inv(dense(M0))
     except np.linalg.LinAlgError:
@@ -227,7 +145,7 @@ def liouville_sum(system: PeriodicSystem) -> tuple[float, float]:
     return -(value + second), abs(second) + 1e-12 * abs(value)
 
 
-def _agree(coarse: np.ndarray, fine: np.ndarray, fine_unresolved: np.ndarray) -> bool:
+def agree(coarse: np.ndarray, fine: np.ndarray, fine_unresolved: np.ndarray) -> bool:
     """Two truncations agree on a cluster: as many exponents, each within a tenth of its
     distance from the axis of one of the other order, all of them stable."""
     if coarse.size == 0 or coarse.size != fine.size:
@@ -238,7 +156,7 @@ def _agree(coarse: np.ndarray, fine: np.ndarray, fine_unresolved: np.ndarray) ->
     return worst < 0 and TRUNCATION_SAFETY * moved < -worst
 
 
-def _certify(out: LatticeExponents, mine: np.ndarray, coarse: np.ndarray, fine: np.ndarray) -> None:
+def certify(out: LatticeExponents, mine: np.ndarray, coarse: np.ndarray, fine: np.ndarray) -> None:
     moved = max(float(np.min(np.abs(fine - z0))) for z0 in coarse)
     hit = mine & out.unresolved
     out.certified[hit] = True

@@ -8,13 +8,13 @@ from typing import Any
 
 import numpy as np
 
-from .result import _EPS, SAFETY
+from .result import EPS, SAFETY
 
 __all__ = []
 
 
 # ----------------------------------------------------------------------------- shared pieces
-def _harmonic_energy(vecs: np.ndarray, n_h: int, n: int) -> np.ndarray:
+def harmonic_energy(vecs: np.ndarray, n_h: int, n: int) -> np.ndarray:
     """Energy fraction per harmonic, shape ``(|H|, n_vec)``."""
     with np.errstate(under="ignore"):
         energy = np.abs(vecs) ** 2
@@ -23,7 +23,7 @@ def _harmonic_energy(vecs: np.ndarray, n_h: int, n: int) -> np.ndarray:
     return per_h / np.where(total > 0, total, 1.0)
 
 
-def _edge_weight(per_h: np.ndarray, H: np.ndarray, exact: bool = False) -> np.ndarray:
+def edge_weight(per_h: np.ndarray, H: np.ndarray, exact: bool = False) -> np.ndarray:
     """Energy fraction in the two outermost harmonics (0 when the truncation is exact)."""
     if exact:
         return np.zeros(per_h.shape[1])
@@ -32,12 +32,12 @@ def _edge_weight(per_h: np.ndarray, H: np.ndarray, exact: bool = False) -> np.nd
     return np.asarray(per_h[0] + per_h[-1])
 
 
-def _fold(lam: np.ndarray, w: float) -> np.ndarray:
+def fold(lam: np.ndarray, w: float) -> np.ndarray:
     shift = np.ceil(lam.imag / w - 0.5)
     return np.asarray(lam - 1j * w * shift)
 
 
-def _error_bound(
+def error_bound(
     lam: np.ndarray, x: np.ndarray, y: np.ndarray, B: Any, normA: float, normB: float
 ) -> np.ndarray:
     """First-order bound ``eps (||A|| + |lam| ||B||) ||x|| ||y|| / |y^H B x|`` per column."""
@@ -47,10 +47,10 @@ def _error_bound(
         nx = np.linalg.norm(x, axis=0)
         ny = np.linalg.norm(y, axis=0)
     tiny = np.finfo(float).tiny
-    return np.asarray(_EPS * (normA + np.abs(lam) * normB) * nx * ny / np.maximum(denom, tiny))
+    return np.asarray(EPS * (normA + np.abs(lam) * normB) * nx * ny / np.maximum(denom, tiny))
 
 
-def _representatives(
+def grid_representatives(
     lam: np.ndarray,
     x: np.ndarray,
     centroid: np.ndarray,

@@ -6,7 +6,7 @@ import numpy as np
 
 from ..harmonics.lattice import Lattice
 from ..system.periodic import PeriodicSystem
-from .checks import _agree, _certify, _split_gaps
+from .checks import agree, certify, split_gaps
 from .outcome import LatticeExponents
 from .result import TRUNCATION_SAFETY
 from .search import lattice_exponents
@@ -95,8 +95,8 @@ def confirm_unresolved(
             keep &= ~mine
             take |= there
             replaced += 1
-        elif _agree(out.exponents[mine], fine.exponents[there], fine.unresolved[there]):
-            _certify(out, mine, out.exponents[mine], fine.exponents[there])
+        elif agree(out.exponents[mine], fine.exponents[there], fine.unresolved[there]):
+            certify(out, mine, out.exponents[mine], fine.exponents[there])
             confirmed += 1
         else:
             left.append(z)
@@ -137,7 +137,7 @@ def confirm_unresolved(
     kept: list[np.ndarray | None] = [None] * int(keep.sum())
     out.vectors = kept + [v for v, t in zip(fine.vectors, take, strict=True) if t]
     out.indices = fine.indices
-    out.split_gap = _split_gaps(out.exponents, finer.indices, system.omega)
+    out.split_gap = split_gaps(out.exponents, finer.indices, system.omega)
     out.info["confirmed"] = {
         "order": finer.order,
         "clusters": int(centres.size),

@@ -8,11 +8,11 @@ import warnings
 import numpy as np
 import scipy.linalg as sla
 
-from ..harmonics.hill import _dense, _diag, hill_pencil
+from ..harmonics.hill import dense, diag, hill_pencil
 from ..harmonics.sets import HarmonicSet
 from ..system.periodic import PeriodicSystem
-from .common import _edge_weight, _error_bound, _fold, _harmonic_energy, _representatives
-from .result import FloquetResult, _result
+from .common import edge_weight, error_bound, fold, grid_representatives, harmonic_energy
+from .result import FloquetResult, floquet_result
 
 __all__ = ["STANDARD_RCOND"]
 
@@ -22,7 +22,7 @@ STANDARD_RCOND = 1e-4
 
 
 # ----------------------------------------------------------------------------- dense
-def _floquet_dense(system: PeriodicSystem, hset: HarmonicSet) -> FloquetResult:
+def floquet_dense(system: PeriodicSystem, hset: HarmonicSet) -> FloquetResult:
     A_sp, B_sp = hill_pencil(system, hset)
     A, B = A_sp.toarray(), B_sp.toarray()
     lam, vl, vr, factor = _pencil_eig(A, B)
@@ -30,19 +30,19 @@ def _floquet_dense(system: PeriodicSystem, hset: HarmonicSet) -> FloquetResult:
     lam, vl, vr = lam[finite], vl[:, finite], vr[:, finite]
     H = hset.indices
     n, w = system.n, system.omega
-    per_h = _harmonic_energy(vr, H.size, n)
+    per_h = harmonic_energy(vr, H.size, n)
     centroid = np.abs(H).astype(float) @ per_h
     expected = min(2 * n - _massless_count(system), lam.size)
     step = int(np.gcd.reduce(np.abs(H))) or 1
     normA, normB = factor * float(np.linalg.norm(A, 1)), factor * float(np.linalg.norm(B, 1))
-    bounds = _error_bound(lam, vr, vl, B, normA, normB)
-    order = _representatives(lam, vr, centroid, w, limit=expected, step=step, bounds=bounds)
+    bounds = error_bound(lam, vr, vl, B, normA, normB)
+    order = grid_representatives(lam, vr, centroid, w, limit=expected, step=step, bounds=bounds)
     if order.size < expected:  # ill-separated copies: fall back to the best centred ones
         order = np.argsort(np.abs(centroid), kind="stable")[:expected]
-    return _result(
-        _fold(lam[order], w),
+    return floquet_result(
+        fold(lam[order], w),
         bounds[order],
-        _edge_weight(per_h[:, order], H, system.time_invariant),
+        edge_weight(per_h[:, order], H, system.time_invariant),
         w,
         "dense",
         info={"size": A.shape[0]},
@@ -78,6 +78,6 @@ def _massless_count(system: PeriodicSystem) -> int:
     if M0 is None:
         return system.n
     if system.n > 2000:  # sparse models: count empty diagonal entries (lumped-mass DOFs)
-        return int(np.sum(_diag(M0, system.n) == 0))
-    s = np.linalg.svd(_dense(M0), compute_uv=False)
+        return int(np.sum(diag(M0, system.n) == 0))
+    s = np.linalg.svd(dense(M0), compute_uv=False)
     return int(np.sum(s <= 1e-12 * s.max())) if s.size and s.max() > 0 else system.n

@@ -42,7 +42,7 @@ class LatticeExponents:
     #: vectors for a search on a finer lattice
     vectors: list[np.ndarray | None] = field(default_factory=list, repr=False)
     indices: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    #: the time-averaged modes (``_Averaged``) the search started from
+    #: the time-averaged modes (:class:`~rheolin.floquet.averaged.Averaged`) the search started from
     modes: Any = field(default=None, repr=False)
     #: truncation estimates not computed yet (``defer_truncation``): ``settle(self, rows)``
     #: fills ``truncation`` and raises ``uncertainty`` on those rows

@@ -44,7 +44,7 @@ SPLIT_FACTOR = 4.0
 TRUNCATION_SAFETY = 10.0
 
 
-_EPS = float(np.finfo(float).eps)
+EPS = float(np.finfo(float).eps)
 
 
 @dataclass
@@ -205,7 +205,7 @@ class FloquetResult:
         return complex(self.exponents[0]) if self.exponents.size else complex("nan")
 
 
-def _result(
+def floquet_result(
     reps: np.ndarray,
     bounds: np.ndarray,
     edges: np.ndarray,

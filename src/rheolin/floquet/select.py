@@ -30,7 +30,9 @@ DEPENDENT = 1e-3
 
 
 @dataclass
-class _Candidate:
+class Candidate:
+    """An eigenpair a lattice search found, with what the selection judges it by."""
+
     lam: complex
     y: np.ndarray  # balanced first-order right eigenvector over the lattice
     energy: np.ndarray  # energy fraction per lattice harmonic
@@ -51,7 +53,25 @@ class _Candidate:
     rate: complex = complex("nan")
 
 
-def _clusters(lam0: np.ndarray, targets: np.ndarray, w: float) -> list[np.ndarray]:
+def targets(lam0: np.ndarray, w: float, near: Any = None) -> np.ndarray:
+    """The averaged exponents ``lam0`` a search targets, by increasing frequency: those in the
+    upper half plane (real ones included; a conjugate is found with its upper twin), or the
+    ones nearest the values ``near`` (one in the lower half plane replaced by its twin)."""
+    scale0 = np.maximum(np.abs(lam0), w)
+    upper = np.flatnonzero(lam0.imag >= -1e-9 * scale0)
+    if near is not None:
+        picks = {int(np.argmin(np.abs(lam0 - z))) for z in np.atleast_1d(near)}
+        picks = {
+            j
+            if lam0[j].imag >= -1e-9 * scale0[j]
+            else int(np.argmin(np.abs(lam0 - np.conj(lam0[j]))))
+            for j in picks
+        }
+        upper = np.array(sorted(picks), dtype=int)
+    return upper[np.argsort(lam0[upper].imag, kind="stable")]
+
+
+def clusters(lam0: np.ndarray, targets: np.ndarray, w: float) -> list[np.ndarray]:
     """Targets grouped where averaged exponents (nearly) coincide (a double eigenvalue of an
     isotropic rotor): one search must find the exponents of the whole group."""
     out: list[np.ndarray] = []
@@ -66,17 +86,17 @@ def _clusters(lam0: np.ndarray, targets: np.ndarray, w: float) -> list[np.ndarra
     return out
 
 
-def _count(kept: list[tuple[_Candidate, bool]]) -> int:
+def count(kept: list[tuple[Candidate, bool]]) -> int:
     return sum(2 if conj_too else 1 for _, conj_too in kept)
 
 
-def _select(
-    pool: list[_Candidate],
+def select(
+    pool: list[Candidate],
     quotas: dict[int, int],
     w: float,
     nh: int,
     share: Any = None,
-) -> list[tuple[_Candidate, bool]]:
+) -> list[tuple[Candidate, bool]]:
     """Representatives, best centred first, each standing for one cluster of targets.
 
     A candidate is skipped when it is a copy of an accounted exponent (``lambda + i h w1``
@@ -89,7 +109,7 @@ def _select(
     """
     order = sorted(range(len(pool)), key=lambda i: (pool[i].centroid, pool[i].edge))
     left = dict(quotas)
-    kept: list[tuple[_Candidate, bool]] = []
+    kept: list[tuple[Candidate, bool]] = []
     # (lambda, top harmonics, unit eigenvector, slack) of every accounted exponent
     known: list[tuple[complex, tuple[int, int], np.ndarray, float]] = []
     for i in order:
@@ -125,9 +145,9 @@ def _select(
 
 
 def _fill(
-    pool: list[_Candidate],
+    pool: list[Candidate],
     left: dict[int, int],
-    kept: list[tuple[_Candidate, bool]],
+    kept: list[tuple[Candidate, bool]],
     known: list[tuple[complex, tuple[int, int], np.ndarray, float]],
     w: float,
     share: Any,
@@ -166,13 +186,13 @@ def _mirror(y: np.ndarray, nh: int) -> np.ndarray:
     return np.conj(y.reshape(2, nh, -1)[:, ::-1, :].ravel())
 
 
-def _tol(c: _Candidate, lam: complex, w: float) -> float:
+def _tol(c: Candidate, lam: complex, w: float) -> float:
     scale = max(abs(c.lam), abs(lam), w)
     return 1e-8 * scale + 1e-3 * np.sqrt(c.edge) * scale + c.slack
 
 
 def _copy_of(
-    c: _Candidate,
+    c: Candidate,
     lam: complex,
     top: tuple[int, int],
     w: float,

@@ -14,8 +14,8 @@ import scipy.sparse.linalg as spla
 from ..harmonics.hill import hill_pencil
 from ..harmonics.sets import HarmonicSet
 from ..system.periodic import PeriodicSystem
-from .common import _edge_weight, _error_bound, _fold, _harmonic_energy, _representatives
-from .result import FloquetResult, _result
+from .common import edge_weight, error_bound, fold, grid_representatives, harmonic_energy
+from .result import FloquetResult, floquet_result
 
 __all__ = []
 
@@ -48,7 +48,7 @@ def _shift_invert(
     return lam, x, y_all[:, match]
 
 
-def _floquet_sparse(
+def floquet_sparse(
     system: PeriodicSystem,
     hset: HarmonicSet,
     frequencies: tuple[float, float] | None,
@@ -84,18 +84,18 @@ def _floquet_sparse(
         omega = sigma.imag + max(radius, (hi - lo) / max_shifts)
     lam = np.concatenate(lams)
     x, y = np.hstack(xs), np.hstack(ys)
-    per_h = _harmonic_energy(x, H.size, n)
+    per_h = harmonic_energy(x, H.size, n)
     centroid = np.abs(H).astype(float) @ per_h
     source = np.concatenate([np.full(v.size, i) for i, v in enumerate(lams)])
     step = int(np.gcd.reduce(np.abs(H))) or 1
-    all_bounds = _error_bound(lam, x, y, B, normA, normB)
-    keep = _representatives(lam, x, centroid, w, source=source, step=step, bounds=all_bounds)
+    all_bounds = error_bound(lam, x, y, B, normA, normB)
+    keep = grid_representatives(lam, x, centroid, w, source=source, step=step, bounds=all_bounds)
     bounds = all_bounds[keep]
-    reps, edges = _fold(lam[keep], w), _edge_weight(per_h[:, keep], H, system.time_invariant)
+    reps, edges = fold(lam[keep], w), edge_weight(per_h[:, keep], H, system.time_invariant)
     # conjugate exponents of a real system (Im < 0 copies were not searched)
     conj = np.abs(reps.imag) > 1e-9 * np.maximum(np.abs(reps), w)
     conj &= np.abs(np.abs(reps.imag) - w / 2) > 1e-9 * w
-    reps = np.concatenate([reps, _fold(reps[conj].conj(), w)])
+    reps = np.concatenate([reps, fold(reps[conj].conj(), w)])
     bounds = np.concatenate([bounds, bounds[conj]])
     edges = np.concatenate([edges, edges[conj]])
     band = _coverage(disks, lo, hi)
@@ -110,7 +110,7 @@ def _floquet_sparse(
     if omega <= hi:
         log.warning("floquet(sparse): stopped at %d shifts below %.6g rad/s", max_shifts, hi)
         info["incomplete"] = True
-    return _result(reps, bounds, edges, w, "sparse", band=band, info=info)
+    return floquet_result(reps, bounds, edges, w, "sparse", band=band, info=info)
 
 
 def _coverage(disks: list[tuple[complex, float]], lo: float, hi: float) -> float:

@@ -22,155 +22,17 @@ from ..budget import format_bytes, solve_budget
 from ..linalg import BlockInverse, Pencil, SingularBlockError, default_workers, make_inverse
 from ..linalg.memory import SolveMemory
 from ..linalg.memory import check as check_memory
+from ..linalg.store import FactorStore
 from ..system.periodic import PeriodicSystem
+from .blocks import Block, Patterns, coefficient_blocks
 from .sets import HarmonicSet
 
 __all__ = ["HarmonicBalance", "SingularBlockError", "default_workers"]
 
 log = logging.getLogger(__name__)
 
-
-class _Block:
-    """Coefficients ``(M_k, D_k, K_k)`` of one harmonic ``k``, compressed to their support.
-
-    Time-varying parts are local (a gear mesh touches two nodes, an asymmetric body its own
-    DOFs), so each block keeps only its nonzero rows and columns: applying it reads and
-    writes ``b x support`` entries, not ``b x n``.
-    """
-
-    def __init__(self, M: Any, D: Any, K: Any, n: int, sparse: bool) -> None:
-        present = [x for x in (M, D, K) if x is not None]
-        rows = np.zeros(n, dtype=bool)
-        cols = np.zeros(n, dtype=bool)
-        for x in present:
-            nz = sp.coo_array(x) if sparse else sp.coo_array(np.asarray(x))
-            rows[nz.row] = True
-            cols[nz.col] = True
-        self.full = bool(rows.sum() > n // 2 or cols.sum() > n // 2)
-        self.rows = np.arange(n) if self.full else np.flatnonzero(rows)
-        self.cols = np.arange(n) if self.full else np.flatnonzero(cols)
-
-        def compress(x: Any) -> Any:
-            if x is None:
-                return None
-            if self.full:
-                return x
-            sub = (sp.csr_array(x) if sparse else np.asarray(x))[self.rows][:, self.cols]
-            return sp.csr_array(sub) if sparse else np.asarray(sub)
-
-        self.M, self.D, self.K = compress(M), compress(D), compress(K)
-        self.n = n
-        self._entries: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-        self._pattern_key: bytes | None = None
-
-    @property
-    def pattern_key(self) -> bytes:
-        """The union pattern of :meth:`entries` as bytes (a cache key for the patterns of
-        operators assembled from this block; values change with the speed, this does not)."""
-        if self._pattern_key is None:
-            rows, cols, _ = self.entries()
-            self._pattern_key = rows.tobytes() + b"|" + cols.tobytes()
-        return self._pattern_key
-
-    def entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The union pattern of ``K, D, M`` in global DOF indices, sorted by (column, row)
-        (CSC order), and the values on it: ``rows, cols, values`` with ``values`` of shape
-        ``(3, nnz)`` holding ``K, D, M`` (zero where one is absent). Built once."""
-        if self._entries is None:
-            coos = [None if x is None else sp.coo_array(x) for x in (self.K, self.D, self.M)]
-            keys = [
-                None if x is None else self.cols[x.col].astype(np.int64) * self.n + self.rows[x.row]
-                for x in coos
-            ]
-            union = np.unique(np.concatenate([k for k in keys if k is not None]))
-            values = np.zeros((3, union.size), dtype=complex)
-            for j, (x, k) in enumerate(zip(coos, keys, strict=True)):
-                if x is not None and k is not None:
-                    np.add.at(values[j], np.searchsorted(union, k), x.data)
-            self._entries = (union % self.n, union // self.n, values)
-        return self._entries
-
-    def values(self, s: np.ndarray) -> np.ndarray:
-        """``K + s D + s^2 M`` on :meth:`entries`' pattern, one row per ``s``."""
-        _, _, (K, D, M) = self.entries()
-        return K[None, :] + s[:, None] * D[None, :] + (s * s)[:, None] * M[None, :]
-
-    def apply(self, Xc: np.ndarray, s: np.ndarray) -> np.ndarray:
-        """Rows ``self.rows`` of ``A_k(n) x_n``; ``Xc`` holds columns ``self.cols`` of ``x_n``.
-
-        One harmonic per row of ``Xc`` (shape ``(b, len(self.cols))``), ``s = i n w1`` per
-        row. Returns shape ``(b, len(self.rows))``.
-        """
-        out = np.zeros((Xc.shape[0], self.rows.size), dtype=complex)
-        if self.K is not None:
-            out += (self.K @ Xc.T).T
-        if self.D is not None:
-            out += (self.D @ (Xc * s[:, None]).T).T
-        if self.M is not None:
-            out += (self.M @ (Xc * (s * s)[:, None]).T).T
-        return out
-
-
-class _Patterns:
-    """A few recent entry patterns (a sweep reuses one at every speed), at most ``size`` of
-    them and ``limit`` bytes in all (a larger one is not kept)."""
-
-    def __init__(self, size: int = 4, limit: int = 256 * 2**20) -> None:
-        self.size, self.limit = size, limit
-        self._kept: dict[Any, tuple[Any, int]] = {}
-
-    def get(self, key: Any) -> Any:
-        got = self._kept.pop(key, None)
-        if got is None:
-            return None
-        self._kept[key] = got  # most recent last
-        return got[0]
-
-    def put(self, key: Any, value: Any) -> None:
-        nbytes = _nbytes(value)
-        self._kept.pop(key, None)
-        if nbytes > self.limit:
-            return
-        self._kept[key] = (value, nbytes)
-        while len(self._kept) > self.size or sum(b for _, b in self._kept.values()) > self.limit:
-            self._kept.pop(next(iter(self._kept)))
-
-
-def _nbytes(value: Any) -> int:
-    """Bytes of the arrays in a (nested) tuple or dict."""
-    if isinstance(value, np.ndarray):
-        return int(value.nbytes)
-    if isinstance(value, dict):
-        return sum(_nbytes(v) for v in value.values())
-    if isinstance(value, (tuple, list)):
-        return sum(_nbytes(v) for v in value)
-    return 0
-
-
 #: Patterns of :meth:`HarmonicBalance._support_matrices`, by harmonics and block patterns.
-_SUPPORT_PATTERNS = _Patterns()
-
-
-def coefficient_blocks(system: PeriodicSystem) -> dict[int, _Block]:
-    """The :class:`_Block` of every coefficient harmonic of ``system`` (0 first), built once
-    per system and kept on it (the solve, the stability check and its memory estimate all use
-    them; a system's coefficients are not changed once it is built)."""
-    cache = system.__dict__.get("_coefficient_blocks")
-    if cache is None:
-        sparse = system.is_sparse
-
-        def get(table: dict, k: int) -> Any:
-            x = table.get(k)
-            if x is None:
-                return None
-            return sp.csr_array(x) if sparse else np.asarray(x)
-
-        cache = {
-            k: _Block(get(system.M, k), get(system.D, k), get(system.K, k), system.n, sparse)
-            for k in [0, *system.coefficient_harmonics]
-        }
-        system.__dict__["_coefficient_blocks"] = cache
-    return dict(cache)
+_SUPPORT_PATTERNS = Patterns()
 
 
 class HarmonicBalance:
@@ -221,6 +83,7 @@ class HarmonicBalance:
         self._inverse: BlockInverse | None = None
         self._last_residual: tuple[np.ndarray, int, np.ndarray] | None = None
         self._support_maps: tuple[Any, sp.csr_array, sp.csr_array] | None = None
+        self._norm_bound: float | None = None
         self._blocks = coefficient_blocks(system)
         self.pencil = self._pencil()
         self._coupling = self._coupling_maps()
@@ -244,7 +107,7 @@ class HarmonicBalance:
         indptr = np.searchsorted(cols, np.arange(self.n_dof + 1))
         return Pencil.from_csc(indptr, rows, values.real, self.w1)  # X_0 is real
 
-    def _coupling_maps(self) -> list[tuple[_Block, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    def _coupling_maps(self) -> list[tuple[Block, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
         """For each ``k != 0``: rows ``m >= 0`` and columns ``n = m - k in H``."""
         maps = []
         H = self.full
@@ -432,7 +295,7 @@ class HarmonicBalance:
         """An upper bound of ``||A||_2`` of the coupled harmonic-balance operator:
         ``max_n sum_k ((n w1)^2 ||M_k|| + |n w1| ||D_k|| + ||K_k||)`` over the harmonic set
         and the coefficient harmonics, each ``||X||_2 <= sqrt(||X||_1 ||X||_inf)``."""
-        if getattr(self, "_norm_bound", None) is None:
+        if self._norm_bound is None:
             s = self.system
 
             def bound(x: Any) -> float:
@@ -474,8 +337,8 @@ class HarmonicBalance:
             )
             decomposition = getattr(self._inverse, "decomposition", None)
             if decomposition is not None:  # the system's time-averaged modes, for floquet
-                self.system.__dict__["_averaged_decomposition"] = decomposition
-            store = getattr(self._inverse, "store", None)
+                self.system.keep("averaged_decomposition", decomposition)
+            store = self.factor_store
             if store is not None:
                 self.memory.factor_bytes = store.factor_bytes
                 self.memory.factors_held = store.factors_alive
@@ -489,6 +352,12 @@ class HarmonicBalance:
                     self.backend_note = f"{self.backend_note}; {note}".lstrip("; ")
             log.debug("A0 inverse: %s %s", self._inverse.name, self.backend_note)
         return self._inverse
+
+    @property
+    def factor_store(self) -> FactorStore | None:
+        """The sparse factors of ``A0(n)`` once :attr:`inverse` is made and keeps them in a
+        :class:`~rheolin.linalg.store.FactorStore`; None otherwise (this makes nothing)."""
+        return getattr(self._inverse, "store", None)
 
     def factorize(self) -> None:
         """Make the inverse of ``A0(n)`` for every ``n >= 0`` now (once)."""

@@ -19,7 +19,7 @@ from .sets import HarmonicSet, as_harmonic_set
 __all__ = ["hill_matrices", "hill_pencil", "state_scaling"]
 
 
-def _dense(x: Any) -> np.ndarray:
+def dense(x: Any) -> np.ndarray:
     return x.toarray() if sp.issparse(x) else np.asarray(x)
 
 
@@ -38,7 +38,7 @@ def scaled_entries(x: Any, left: np.ndarray, right: np.ndarray) -> tuple[np.ndar
     return r, c, v[keep] * left[r] * right[c]
 
 
-def _diag(x: Any, n: int) -> np.ndarray:
+def diag(x: Any, n: int) -> np.ndarray:
     if x is None:
         return np.zeros(n)
     return np.abs(np.asarray(x.diagonal() if sp.issparse(x) else np.diagonal(x), dtype=float))
@@ -58,8 +58,8 @@ def state_scaling(system: PeriodicSystem) -> tuple[np.ndarray, np.ndarray]:
     (array([1.e+06, 3.e+00]), array([1., 2.]))
     """
     n, w = system.n, system.omega
-    m = _diag(system.M.get(0), n)
-    k = _diag(system.K.get(0), n)
+    m = diag(system.M.get(0), n)
+    k = diag(system.K.get(0), n)
     sq = np.sqrt(np.where(k > 0, k, np.where(m > 0, m * w * w, 1.0)))
     sv = np.where(m > 0, np.sqrt(m), sq / w)
     return sq, sv

@@ -14,18 +14,20 @@ Nothing is quadratic in the lattice size.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import scipy.sparse as sp
 
 from ..system.periodic import PeriodicSystem
-from .balance import _Block, _Patterns, coefficient_blocks
+from .blocks import Block, Patterns, coefficient_blocks
 
 __all__ = ["LatticeHill"]
 
 
 #: Entry patterns of :class:`_Coupling`, by harmonics and block patterns (a sweep's speeds share
 #: them).
-_PATTERNS = _Patterns(8)
+_PATTERNS = Patterns(8)
 
 
 class _Coupling:
@@ -37,7 +39,7 @@ class _Coupling:
 
     def __init__(
         self,
-        blocks: dict[int, _Block],
+        blocks: dict[int, Block],
         row_h: np.ndarray,
         col_h: np.ndarray,
         n: int,
@@ -78,7 +80,7 @@ class _Coupling:
 
     def _pattern(
         self,
-        blocks: dict[int, _Block],
+        blocks: dict[int, Block],
         row_h: np.ndarray,
         col_h: np.ndarray,
         n: int,
@@ -170,6 +172,7 @@ class LatticeHill:
         self.blocks = coefficient_blocks(system)
         self.inner = _Coupling(self.blocks, self.H, self.H, self.n)
         self._outer: tuple[np.ndarray, _Coupling, _Coupling] | None = None
+        self._pardiso: tuple[tuple[int, int, int], Any] | None = None
         self.size = self.H.size * self.n
 
     # ------------------------------------------------------------------ inside
@@ -197,6 +200,27 @@ class LatticeHill:
             io = _Coupling(self.blocks, self.H, O, self.n, skip_zero=True)
             self._outer = (O, oi, io)
         return self._outer
+
+    def pardiso_analysis(self, Q: sp.csc_array, *, slots: int, refinement: int) -> Any:
+        """The MKL PARDISO analysis (:class:`~rheolin.linalg.direct.pardiso.PardisoBackend`)
+        of the pattern of ``Q`` (CSC with sorted indices; this lattice's ``Q`` at every shift
+        shares one), made on first use and kept here. Kept per lattice, not across calls:
+        MKL PARDISO crashes when its thread count changes between the analysis and a
+        factorization (``threadpool_limits`` entered anew by the next call)."""
+        from ..linalg.direct import csc_pattern_key
+        from ..linalg.direct.pardiso import PardisoBackend
+
+        key = csc_pattern_key(Q.indptr, Q.indices)
+        if self._pardiso is None or self._pardiso[0] != key:
+            backend = PardisoBackend(
+                Q.indptr.astype(np.int64),
+                Q.indices.astype(np.int64),
+                True,
+                slots=slots,
+                refinement=refinement,
+            )
+            self._pardiso = (key, backend)
+        return self._pardiso[1]
 
     def memory_bytes(self, fill: float = 8.0) -> int:
         """Estimate of the memory of one shift: ``Q`` and its LU (``fill`` x its entries)."""

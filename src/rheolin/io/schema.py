@@ -1,22 +1,67 @@
-"""The model file schema (TOML), checked by pydantic; quantities converted to SI by pint.
+"""The model file schema (TOML), checked by pydantic: one table class per kind of item.
 
 Field names are those of :class:`rheolin.mechanics.Model`'s methods. Structure and units are
-checked here; references between items (bodies, nodes, gear geometry) in
-:mod:`rheolin.io.loader`. See ``docs/model-format.md``.
+checked here (the unit-checked field types are in :mod:`rheolin.io.quantities`); references
+between items (bodies, nodes, gear geometry) in :mod:`rheolin.io.build`. See
+``docs/model-format.md``.
 """
 
 from __future__ import annotations
 
-import re
 import typing
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from ..mechanics.sections import MATERIALS
-from .units import UnitError, to_si
+from .quantities import (
+    Angle,
+    AreaPos,
+    CoupleUnbalanceNonNeg,
+    DampingNonNeg,
+    DensityNonNeg,
+    DensityPos,
+    DiskBore,
+    DiskSize,
+    ForcePos,
+    HelixAngle,
+    Index,
+    Length,
+    LengthNonNeg,
+    LengthPos,
+    MassNonNeg,
+    MassPos,
+    Name,
+    PressureAngle,
+    PressurePos,
+    Ratio,
+    Raw,
+    SecondMomentPos,
+    ShaftBore,
+    ShaftDiameter,
+    SpeedPos,
+    StiffnessNonNeg,
+    TimeNonNeg,
+    UnbalanceNonNeg,
+    VecAcceleration,
+    VecDensityNonNeg,
+    VecDimensionless,
+    VecForce,
+    VecForceNonNeg,
+    VecLength,
+    VecLengthNonNeg,
+    VecLengthPos,
+    VecMoment,
+    VecPressurePos,
+    VecSpeedNonNeg,
+    VecStiffnessPos,
+    ViscosityPos,
+    hertz_stiffness,
+    inertia_matrix,
+)
+from .units import to_si
 
 __all__ = [
     "Bearing",
@@ -32,144 +77,10 @@ __all__ = [
     "table_class",
 ]
 
-_LIST_TEXT = re.compile(r"^\s*\[?\s*([-+0-9.eE,\s]+?)\s*\]?\s+([A-Za-z][^\[\]]*)$")
-
-
-def _quantity(kind: str, sign: str = "") -> Callable[[Any], float]:
-    def convert(value: Any) -> float:
-        v = to_si(value, kind)
-        if sign == "+" and not v > 0:
-            raise UnitError(f"must be > 0, got {value!r}")
-        if sign == "0+" and not v >= 0:
-            raise UnitError(f"must be >= 0, got {value!r}")
-        return v
-
-    return convert
-
-
-def _angle_between(low_deg: float, high_deg: float) -> Callable[[Any], float]:
-    """An angle in the open interval ``(low_deg, high_deg)`` degrees (stored in radians)."""
-
-    def convert(value: Any) -> float:
-        v = to_si(value, "angle")
-        if not np.radians(low_deg) < v < np.radians(high_deg):
-            raise UnitError(
-                f"must lie strictly between {low_deg:g} and {high_deg:g} deg, got {value!r}"
-                + (" (a plain number is radians)" if not isinstance(value, str) else "")
-            )
-        return v
-
-    return convert
-
-
-def _plain_length_at_most(limit: float, what: str) -> Callable[[Any], Any]:
-    """Refuse a plain number (metres) above ``limit`` m where units were surely forgotten
-    (``outer_diameter = 30`` is 30 m, not 30 mm); values with units pass unchanged."""
-
-    def check(value: Any) -> Any:
-        items = value if isinstance(value, list) else [value]
-        for x in items:
-            if isinstance(x, int | float) and not isinstance(x, bool) and abs(x) > limit:
-                raise UnitError(
-                    f"a plain number is metres: {x!r} m is not a plausible {what} (allowed: up "
-                    f"to {limit:g} m); give units, e.g. '{x:g} mm'"
-                )
-        return value
-
-    return check
-
-
-def _vector(kind: str, sign: str = "") -> Callable[[Any], list[float]]:
-    one = _quantity(kind, sign)
-
-    def convert(value: Any) -> list[float]:
-        if isinstance(value, str):  # "0 20 50 90 mm" or "[0, 20, 50] mm"
-            m = _LIST_TEXT.match(value)
-            if not m:
-                return [one(value)]
-            nums = [x for x in re.split(r"[,\s]+", m.group(1)) if x]
-            return [one(f"{x} {m.group(2)}") for x in nums]
-        if isinstance(value, list):
-            out = []
-            for i, x in enumerate(value):
-                try:
-                    out.append(one(x))
-                except UnitError as exc:
-                    raise UnitError(f"entry {i}: {exc}") from None
-            return out
-        return [one(value)]
-
-    return convert
-
-
-Angle = Annotated[float, BeforeValidator(_quantity("angle"))]
-PressureAngle = Annotated[float, BeforeValidator(_angle_between(0.0, 90.0))]
-HelixAngle = Annotated[float, BeforeValidator(_angle_between(-90.0, 90.0))]
-AreaPos = Annotated[float, BeforeValidator(_quantity("area", "+"))]
-CoupleUnbalanceNonNeg = Annotated[float, BeforeValidator(_quantity("couple_unbalance", "0+"))]
-DampingNonNeg = Annotated[float, BeforeValidator(_quantity("damping", "0+"))]
-DensityPos = Annotated[float, BeforeValidator(_quantity("density", "+"))]
-DensityNonNeg = Annotated[float, BeforeValidator(_quantity("density", "0+"))]
-LengthPos = Annotated[float, BeforeValidator(_quantity("length", "+"))]
-Length = Annotated[float, BeforeValidator(_quantity("length"))]
-LengthNonNeg = Annotated[float, BeforeValidator(_quantity("length", "0+"))]
-MassPos = Annotated[float, BeforeValidator(_quantity("mass", "+"))]
-MassNonNeg = Annotated[float, BeforeValidator(_quantity("mass", "0+"))]
-PressurePos = Annotated[float, BeforeValidator(_quantity("pressure", "+"))]
-SecondMomentPos = Annotated[float, BeforeValidator(_quantity("second_moment", "+"))]
-SpeedPos = Annotated[float, BeforeValidator(_quantity("speed", "+"))]
-StiffnessNonNeg = Annotated[float, BeforeValidator(_quantity("stiffness", "0+"))]
-TimeNonNeg = Annotated[float, BeforeValidator(_quantity("time", "0+"))]
-UnbalanceNonNeg = Annotated[float, BeforeValidator(_quantity("unbalance", "0+"))]
-VecAcceleration = Annotated[list[float], BeforeValidator(_vector("acceleration"))]
-VecDimensionless = Annotated[list[float], BeforeValidator(_vector("dimensionless"))]
-VecForce = Annotated[list[float], BeforeValidator(_vector("force"))]
-VecLength = Annotated[list[float], BeforeValidator(_vector("length"))]
-VecLengthPos = Annotated[list[float], BeforeValidator(_vector("length", "+"))]
-VecLengthNonNeg = Annotated[list[float], BeforeValidator(_vector("length", "0+"))]
-#: Largest plain-number shaft diameter [m]: the largest marine shafts are about 1 m.
-MAX_PLAIN_SHAFT_DIAMETER = 5.0
-#: Largest plain-number disk dimension [m] (large hydro-generator rotors).
-MAX_PLAIN_DISK_SIZE = 25.0
-ShaftDiameter = Annotated[
-    VecLengthPos, BeforeValidator(_plain_length_at_most(MAX_PLAIN_SHAFT_DIAMETER, "shaft diameter"))
-]
-ShaftBore = Annotated[
-    VecLengthNonNeg,
-    BeforeValidator(_plain_length_at_most(MAX_PLAIN_SHAFT_DIAMETER, "shaft diameter")),
-]
-DiskSize = Annotated[
-    LengthPos, BeforeValidator(_plain_length_at_most(MAX_PLAIN_DISK_SIZE, "disk size"))
-]
-DiskBore = Annotated[
-    LengthNonNeg, BeforeValidator(_plain_length_at_most(MAX_PLAIN_DISK_SIZE, "disk size"))
-]
-VecMoment = Annotated[list[float], BeforeValidator(_vector("moment"))]
-VecPressurePos = Annotated[list[float], BeforeValidator(_vector("pressure", "+"))]
-VecDensityNonNeg = Annotated[list[float], BeforeValidator(_vector("density", "0+"))]
-VecSpeedNonNeg = Annotated[list[float], BeforeValidator(_vector("speed", "0+"))]
-Index = Annotated[int, Field(ge=0, strict=True)]
-
 #: Harmonics of a rectangular-wave mesh stiffness beyond this are refused: the 500th of a
 #: contact-ratio wave is below 1e-3 of the first, and each adds two generators to the
 #: harmonic set (its size, and the memory, grow with their number).
 MAX_STIFFNESS_HARMONICS = 500
-Name = Annotated[str, Field(min_length=1)]
-Raw = float | int | str | list[Any]  # matrices whose units depend on components
-
-
-def _fraction_text(value: Any) -> str:
-    from fractions import Fraction
-
-    if isinstance(value, bool) or not isinstance(value, int | float | str):
-        raise ValueError(f"expected a number or a fraction like '1/2', got {value!r}")
-    try:
-        return str(Fraction(str(value).strip()))
-    except (ValueError, ZeroDivisionError):
-        raise ValueError(f"expected a number or a fraction like '1/2', got {value!r}") from None
-
-
-Ratio = Annotated[str, BeforeValidator(_fraction_text)]
 
 
 class _Strict(BaseModel):
@@ -228,33 +139,7 @@ class Disk(_Strict):
     @field_validator("inertia")
     @classmethod
     def _inertia(cls, value: list[Any] | None) -> list[Any] | None:
-        return _inertia_matrix(value, definite=False)
-
-
-def _inertia_matrix(value: list[Any] | None, definite: bool = True) -> list[Any] | None:
-    """3 values or a 3x3 symmetric matrix of inertias, positive (semi-)definite."""
-    if value is None:
-        return None
-    conv = _quantity("inertia")
-    try:
-        rows = [[conv(x) for x in r] for r in value] if isinstance(value[0], list) else None
-        J = np.array(rows) if rows is not None else np.diag([conv(x) for x in value])
-    except (UnitError, TypeError, IndexError) as exc:
-        raise ValueError(f"must be 3 values or a 3x3 matrix of inertias: {exc}") from None
-    if J.shape != (3, 3):
-        raise ValueError(f"must be 3 values or a 3x3 matrix, got shape {J.shape}")
-    scale = float(np.abs(J).max(initial=0.0))
-    if not np.allclose(J, J.T, rtol=0.0, atol=1e-9 * scale):
-        raise ValueError("the inertia (mass) matrix must be symmetric")
-    eig = np.linalg.eigvalsh(0.5 * (J + J.T))
-    if definite and (scale == 0.0 or eig.min() <= 0.0):
-        raise ValueError(f"the inertia (mass) matrix must be positive definite; eigenvalues {eig}")
-    if eig.min() < -1e-12 * scale:
-        raise ValueError(
-            "the inertia (mass) matrix must be positive definite (or semi-definite for a "
-            f"point mass); eigenvalues {eig}"
-        )
-    return J.tolist()
+        return inertia_matrix(value, definite=False)
 
 
 Material = Literal["steel", "stainless_steel", "cast_iron", "aluminium", "titanium"]
@@ -277,8 +162,8 @@ class Journal(_Strict):
     diameter: LengthPos
     length: LengthPos
     clearance: LengthPos
-    viscosity: Annotated[float, BeforeValidator(_quantity("viscosity", "+"))]
-    load: Annotated[float, BeforeValidator(_quantity("force", "+"))]
+    viscosity: ViscosityPos
+    load: ForcePos
     load_direction: list[float] = [0.0, -1.0, 0.0]
 
 
@@ -323,27 +208,6 @@ class Bearing(_Strict):
         return self
 
 
-def _hertz_stiffness(value: Any, exponent: float) -> float:
-    """``K`` of ``F = K delta^n`` [N/m^n]: a number (SI) or a quantity string."""
-    if isinstance(value, bool) or not isinstance(value, int | float | str):
-        raise ValueError(f"expected a number (SI, N/m^{exponent:g}) or a quantity, got {value!r}")
-    if isinstance(value, str):
-        from .units import _registry
-
-        try:
-            out = float(_registry()(value).to(f"N/m**{exponent!r}").magnitude)
-        except Exception as exc:
-            raise ValueError(
-                f"expected a stiffness in N/m^{exponent:.4g} (the exponent of "
-                f"{'ball' if exponent == 1.5 else 'roller'} contact), got {value!r}: {exc}"
-            ) from None
-    else:
-        out = float(value)
-    if not (np.isfinite(out) and out > 0):
-        raise ValueError(f"must be > 0, got {value!r}")
-    return out
-
-
 class RollingBearing(_Strict):
     """``Model.add_rolling_bearing``: a load-dependent rolling-element bearing."""
 
@@ -356,7 +220,7 @@ class RollingBearing(_Strict):
     clearance: LengthNonNeg = 0.0
     angle: Angle = 0.0
     deflection: VecLengthNonNeg | None = None
-    force: Annotated[list[float], BeforeValidator(_vector("force", "0+"))] | None = None
+    force: VecForceNonNeg | None = None
     damping: DampingNonNeg = 0.0
     other_body: Name | None = None
     other_node: Index | None = None
@@ -381,7 +245,7 @@ class RollingBearing(_Strict):
                 "law = 'elements' needs `elements` (the number of balls/rollers, >= 3)"
             )
         try:
-            self.stiffness = _hertz_stiffness(self.stiffness, EXPONENTS[self.kind])
+            self.stiffness = hertz_stiffness(self.stiffness, EXPONENTS[self.kind])
         except ValueError as exc:
             raise ValueError(f"`stiffness`: {exc}") from None
         return self
@@ -462,7 +326,7 @@ class RigidBody(_Body):
     @field_validator("inertia")
     @classmethod
     def _inertia(cls, value: list[Any]) -> list[Any] | None:
-        return _inertia_matrix(value, definite=True)
+        return inertia_matrix(value, definite=True)
 
 
 class CondensedBody(_Body):
@@ -511,8 +375,8 @@ class Mesh(_Strict):
     side: Literal[1, -1] = 1
     load_law: Literal["iso6336", "table"] | None = None
     face_width: LengthPos | None = None
-    load_forces: Annotated[list[float], BeforeValidator(_vector("force", "0+"))] | None = None
-    load_stiffness: Annotated[list[float], BeforeValidator(_vector("stiffness", "+"))] | None = None
+    load_forces: VecForceNonNeg | None = None
+    load_stiffness: VecStiffnessPos | None = None
 
     @model_validator(mode="after")
     def _load_law(self) -> Mesh:

@@ -20,7 +20,7 @@ import math
 from functools import lru_cache
 from typing import Any
 
-__all__ = ["DIMENSIONS", "SI_RANGE", "UnitError", "to_si"]
+__all__ = ["DIMENSIONS", "SI_RANGE", "UnitError", "to_si", "unit_registry"]
 
 #: Quantity kinds: SI unit they convert to, and an example for error messages.
 DIMENSIONS: dict[str, tuple[str, str]] = {
@@ -64,7 +64,7 @@ class UnitError(ValueError):
 
 
 @lru_cache(maxsize=1)
-def _registry() -> Any:
+def unit_registry() -> Any:
     import pint
 
     return pint.UnitRegistry()
@@ -100,7 +100,7 @@ def to_si(value: Any, kind: str) -> float:
 
 
 def _parse(text: str, kind: str, unit: str, example: str) -> float:
-    ureg = _registry()
+    ureg = unit_registry()
     try:
         q = ureg.Quantity(text.strip())
     except Exception:

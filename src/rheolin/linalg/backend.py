@@ -33,10 +33,10 @@ DENSE_MAX_BYTES = 256 * 2**20
 #: Largest system for the modal resolvent (its eigendecomposition is dense, ``(2N)^3``).
 MODAL_MAX_DOF = 1000
 MODAL_MAX_BYTES = 512 * 2**20
-#: Measured on 2 cores: eigendecomposition ~1.5e-9 (2N)^3 s; one SuperLU factor and solve
-#: of a small block with SciPy's overhead ~3e-4 s. The modal route needs a clear margin.
-_EIG_SECONDS_PER_FLOP = 1.5e-9
-_LU_SECONDS_PER_BLOCK = 3e-4
+#: Cost model of :func:`choose_backend`: seconds per ``(2N)^3`` of the dense eigendecomposition
+#: and per SuperLU factor and solve of a small block (measured by bench/block_inverse.py).
+EIG_SECONDS_PER_FLOP = 1.5e-9
+LU_SECONDS_PER_BLOCK = 3e-4
 
 
 class BlockInverse(Protocol):
@@ -59,11 +59,11 @@ def choose_backend(n_dof: int, n_harmonics: int) -> list[str]:
     (['modal', 'lu'], ['dense'], ['lu'])
     """
     order = []
-    eig = _EIG_SECONDS_PER_FLOP * (2 * n_dof) ** 3
+    eig = EIG_SECONDS_PER_FLOP * (2 * n_dof) ** 3
     if (
         n_dof <= MODAL_MAX_DOF
         and n_harmonics * 2 * n_dof * 16 <= MODAL_MAX_BYTES
-        and eig < 0.25 * n_harmonics * _LU_SECONDS_PER_BLOCK
+        and eig < 0.25 * n_harmonics * LU_SECONDS_PER_BLOCK
     ):
         order.append("modal")
     if n_dof <= DENSE_MAX_DOF and n_harmonics * n_dof**2 * 16 <= DENSE_MAX_BYTES:

@@ -85,7 +85,7 @@ class ModalInverse:
         self.lam = lam
         #: ``(lam, V, V^-1, L_K, L_K^-T, L_M^-1)``: the decomposition in the coordinates above
         #: (the lattice Floquet method takes its time-averaged modes from it, see
-        #: :class:`rheolin.floquet.averaged._Averaged`)
+        #: :class:`rheolin.floquet.averaged.Averaged`)
         self.decomposition = (lam, V, Vi, Lk, LkTi, Lmi)
         self._PhiT = np.ascontiguousarray((LkTi @ V[:N]).T)  # (2N, N)
         self._PsiT = np.ascontiguousarray((Vi[:, N:] @ Lmi).T)  # (N, 2N)

@@ -1,10 +1,10 @@
 """One long-lived thread pool per size, shared by every solve (or none).
 
 A new ``ThreadPoolExecutor`` per factorization costs thread start-up each time, and SciPy's
-SuperLU called from fresh threads grew the resident memory by 450 MB over 500 solves (each new
-thread gets its own malloc arena). The pool here is made once and kept until exit.
-SuperLU holds the GIL while factorizing (two threads were slower than one on 40
-factorizations), so the default is no pool at all: ``default_workers() == 1``.
+SuperLU called from fresh threads grows the resident memory (each new thread gets its own
+malloc arena). The pool here is made once and kept until exit. SuperLU holds the GIL while
+factorizing, so threads do not speed it up and the default is no pool at all:
+``default_workers() == 1``.
 """
 
 from __future__ import annotations

@@ -50,7 +50,7 @@ from .rotation import (
     unit_axis,
 )
 
-__all__ = ["CondensedBody", "load_condensed", "load_matrix"]
+__all__ = ["CondensedBody", "condensed_body", "load_condensed", "load_matrix"]
 
 
 def load_matrix(path: str | Path) -> np.ndarray:
@@ -330,3 +330,47 @@ def load_condensed(
         G=data.get("G"),  # type: ignore[arg-type]
         frame=data.get("frame"),  # type: ignore[arg-type]
     )
+
+
+def condensed_body(
+    positions: Any, M: Any, K: Any, D: Any, G: Any, frame: Any, path: str | None, body: Any
+) -> tuple[np.ndarray, CondensedBody]:
+    """The node positions (``n x 3``) and the :class:`CondensedBody` with body-local nodes of
+    a condensed body given by exactly one of: its matrices, a ``.npz`` ``path``, or a
+    ``body`` (:class:`rheolin.fe.CondensedFE`), whose reference points and file positions are
+    the default ``positions`` (``Model.add_condensed_body`` names the arguments).
+
+    >>> pts, cb = condensed_body([[0, 0, 1]], np.eye(6), np.eye(6), None, None, None, None, None)
+    >>> pts.tolist(), cb.dofs.tolist()
+    ([[0.0, 0.0, 1.0]], [0, 1, 2, 3, 4, 5])
+    """
+    if body is not None:
+        if path is not None or M is not None:
+            raise ModelError("give one of `body`, `path` or the matrices `M`, `K`")
+        M, K, D, G = body.M, body.K, body.D, body.G
+    if positions is None:
+        if body is not None:
+            positions = body.positions
+        elif path is not None:
+            with np.load(path) as z:
+                if "positions" not in z.files:
+                    raise ModelError("`positions`: required (the file has no `positions`)")
+                positions = z["positions"]
+        else:
+            raise ModelError("`positions`: give one 3-vector per node")
+    pts = np.asarray(positions, dtype=float).reshape(-1, 3)
+    nodes = list(range(len(pts)))  # body-local; the assembly maps them to global nodes
+    axes = None if frame is None else np.asarray(frame, dtype=float)
+    if body is not None:
+        cb = CondensedBody(
+            M=M, K=K, nodes=nodes, D=D, G=G, frame=axes, n_modes=body.n_modes, C=body.C
+        )
+    elif path is not None:
+        if M is not None or K is not None:
+            raise ModelError("give either `path` or the matrices `M`, `K`, not both")
+        cb = load_condensed(path, nodes=nodes, frame=axes)
+    else:
+        if M is None or K is None:
+            raise ModelError("a condensed body needs `M` and `K` (or a `path`)")
+        cb = CondensedBody(M=M, K=K, nodes=nodes, D=D, G=G, frame=axes)
+    return pts, cb

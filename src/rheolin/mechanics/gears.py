@@ -13,18 +13,22 @@ convolution of the coefficient sequences.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import ModelError
 from ._term import Term
+from .items import positive
+from .rolling import MeshLoadLaw
 
 __all__ = [
     "gear_mesh_term",
     "line_of_action",
     "mesh_convolve",
+    "mesh_record",
     "rectangular_wave_coefficients",
 ]
 
@@ -249,3 +253,63 @@ def _two_sided(coeffs: Mapping[int, complex], field: str) -> dict[int, complex]:
     if 0 in out:
         out[0] = complex(out[0].real)
     return out
+
+
+def mesh_record(
+    module: float,
+    pressure_angle: float,
+    helix_angle: float,
+    stiffness: float | dict[int, complex] | None,
+    contact_ratio: float | None,
+    single_stiffness: float | None,
+    double_stiffness: float | None,
+    stiffness_harmonics: int,
+    damping: float,
+    transmission_error: dict[int, complex] | None,
+    side: int,
+    center_direction: Sequence[float] | None,
+    load_law: str | None,
+    face_width: float | None,
+    load_forces: Sequence[float] | None,
+    load_stiffness: Sequence[float] | None,
+) -> dict[str, Any]:
+    """The geometry, stiffness function and load law of a mesh, checked, as the model's mesh
+    table holds them (``Model.add_gear_mesh`` names the arguments): the stiffness given, or
+    the rectangular wave of the contact ratio and the two tooth-pair levels.
+
+    >>> g = mesh_record(0.003, 0.35, 0.0, None, 1.5, 2e8, 3e8, 4, 0.0, None, 1, None,
+    ...                 None, None, None, None)
+    >>> round(float(np.real(g["stiffness"][0])) / 1e8, 6)
+    2.5
+    """
+    if stiffness is None:
+        if None in (contact_ratio, single_stiffness, double_stiffness):
+            raise ModelError(
+                "give `stiffness`, or `contact_ratio`, `single_stiffness` and "
+                "`double_stiffness` (rectangular wave)"
+            )
+        assert contact_ratio is not None and single_stiffness is not None
+        assert double_stiffness is not None
+        stiffness = rectangular_wave_coefficients(
+            contact_ratio, single_stiffness, double_stiffness, stiffness_harmonics
+        )
+    positive(module, "module")
+    mesh_law = None
+    if load_law is not None:
+        mesh_law = MeshLoadLaw(
+            law=load_law,
+            face_width=float(face_width or 0.0),
+            forces=None if load_forces is None else np.asarray(load_forces, float),
+            stiffness=None if load_stiffness is None else np.asarray(load_stiffness, float),
+        )
+    return dict(
+        module=float(module),
+        pressure_angle=float(pressure_angle),
+        helix_angle=float(helix_angle),
+        stiffness=stiffness,
+        damping=float(damping),
+        transmission_error=transmission_error,
+        side=side,
+        center_direction=center_direction,
+        load_law=mesh_law,
+    )

@@ -13,20 +13,26 @@ phiz)``. Its contribution to the node pair is ``[[X, -X], [-X, X]]``.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import ModelError
 from ._term import SpeedTerm, Term
+from .bearing_table import SpeedTable
 from .rotation import circulatory_matrix, rotate_body_matrix
 
 __all__ = [
     "COMPONENTS",
+    "bearing_record",
     "coupling_speed_term",
     "coupling_term",
     "expand_matrix",
     "joint_term",
+    "lever",
+    "link_components",
+    "pair_block",
 ]
 
 #: Names of the six DOFs of a node, in order.
@@ -228,3 +234,97 @@ def coupling_speed_term(
         for p in X:
             X[p] = _pair(dofs_a, dofs_b, X[p], levers)[1]
     return SpeedTerm(dofs, M=M, K=K, D=D)
+
+
+# --------------------------------------------------------------------------- model input
+def _per_speed(value: Any, n: int, components: Sequence[str] | None, name: str) -> np.ndarray:
+    """One 6x6 matrix per speed from a table (or one value for every speed)."""
+    a = np.asarray(value, dtype=float)
+    if a.ndim == 0:
+        return np.array([expand_matrix(float(a), components, name)] * n)
+    if a.shape[0] != n:
+        raise ModelError(f"`{name}`: give one entry per speed ({n}), got {a.shape[0]}")
+    return np.array([expand_matrix(x, components, f"{name}[{i}]") for i, x in enumerate(a)])
+
+
+def _preload(preload: ArrayLike | None, frame: str | None, speeds: object) -> np.ndarray | None:
+    """The preload as 6 numbers (force, moment), for constant inertial-frame joints only."""
+    if preload is None:
+        return None
+    pre = np.asarray(preload, dtype=float).ravel()
+    if pre.size not in (3, 6) or not np.all(np.isfinite(pre)):
+        raise ModelError(
+            f"`preload` must be 3 (force) or 6 (force, moment) finite numbers, got {preload!r}"
+        )
+    if frame is not None or speeds is not None:
+        raise ModelError("`preload`: only for constant joints in the inertial frame")
+    return np.concatenate([pre, np.zeros(6 - pre.size)])
+
+
+def bearing_record(
+    stiffness: Any,
+    damping: Any,
+    mass: Any,
+    components: Sequence[str] | None,
+    frame: str | None,
+    speeds: Sequence[float] | None,
+    interpolation: str,
+    extrapolate: bool,
+    offset: Sequence[float] | None,
+    other_offset: Sequence[float] | None,
+    two_sided: bool,
+    preload: Sequence[float] | None,
+) -> dict[str, Any]:
+    """The matrices (or speed table), frame, offsets and preload of a bearing, checked, as
+    the model's joint table holds them (``Model.add_bearing`` names the arguments).
+
+    >>> j = bearing_record(1e6, 0.0, 0.0, ["ux"], None, None, "cubic", False, None, None,
+    ...                    False, [0.0, 5.0, 0.0])
+    >>> float(j["K"][0, 0]), j["preload"].tolist()
+    (1000000.0, [0.0, 5.0, 0.0, 0.0, 0.0, 0.0])
+    """
+    if frame is not None and (offset is not None or other_offset is not None):
+        raise ModelError("`offset`: only for joints in the inertial frame (frame=None)")
+    if other_offset is not None and not two_sided:
+        raise ModelError("`other_offset` needs `other_body` (a joint to ground has one side)")
+    lever(offset)  # checked: a finite 3-vector
+    lever(other_offset)
+    pre = _preload(preload, frame, speeds)
+    table = None
+    if speeds is None:
+        K = expand_matrix(stiffness, components, "stiffness")
+        D = expand_matrix(damping, components, "damping")
+        M = expand_matrix(mass, components, "mass")
+    else:
+        if frame is not None:
+            raise ModelError("`speeds`: speed-dependent coefficients need `frame=None`")
+        n = np.asarray(speeds, dtype=float).size
+        tabs = [
+            _per_speed(x, n, components, fld)
+            for x, fld in ((stiffness, "stiffness"), (damping, "damping"), (mass, "mass"))
+        ]
+        table = SpeedTable(speeds, tabs[0], tabs[1], tabs[2], interpolation, bool(extrapolate))
+        K, D, M = (np.zeros((6, 6)) for _ in range(3))
+    return dict(
+        K=K,
+        D=D,
+        M=M,
+        frame=frame,
+        table=table,
+        components=None if components is None else list(components),
+        offset=None if offset is None else [float(v) for v in offset],
+        other_offset=None if other_offset is None else [float(v) for v in other_offset],
+        preload=pre,
+    )
+
+
+def link_components(components: Sequence[str] | None) -> list[str]:
+    """The components a rigid link constrains: distinct names from :data:`COMPONENTS`, all six
+    when None."""
+    comps = list(COMPONENTS) if components is None else list(components)
+    bad = [c for c in comps if c not in COMPONENTS]
+    if bad or not comps or len(set(comps)) != len(comps):
+        raise ModelError(
+            f"`components` must be distinct names from {list(COMPONENTS)}, got {components!r}"
+        )
+    return comps

@@ -6,7 +6,7 @@ transmission error from the gear meshes (:mod:`rheolin.mechanics.gears`).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 import scipy.sparse as sp
@@ -14,8 +14,63 @@ from numpy.typing import ArrayLike
 
 from ..errors import ModelError
 from ._term import Term
+from .joints import lever
 
-__all__ = ["gravity_load", "harmonic_force_term"]
+__all__ = [
+    "gravity_load",
+    "gravity_vector",
+    "harmonic_force_term",
+    "moment_at_node",
+    "torque_value",
+]
+
+
+def gravity_vector(gravity: ArrayLike) -> np.ndarray:
+    """Gravity [m/s^2] as a finite 3-vector (global axes).
+
+    >>> gravity_vector([0, -9.81, 0]).tolist()
+    [0.0, -9.81, 0.0]
+    """
+    g = np.asarray(gravity, dtype=float).reshape(-1)
+    if g.shape != (3,) or not np.all(np.isfinite(g)):
+        raise ModelError(f"`gravity` must be a finite 3-vector [m/s^2], got {gravity!r}")
+    return g
+
+
+def moment_at_node(
+    force: Sequence[float], moment: Sequence[float], offset: Sequence[float] | None
+) -> Sequence[float]:
+    """The moment a node carries for a force acting at ``offset`` [m] from it, rigidly
+    attached: ``moment + r x F`` (``moment`` itself without an offset).
+
+    >>> [float(x) for x in moment_at_node((0.0, 10.0, 0.0), (0.0, 0.0, 0.0), (0.5, 0.0, 0.0))]
+    [0.0, 0.0, 5.0]
+    """
+    T = lever(offset)
+    if T is None:
+        return moment
+    # F at r: the node's load is T^T (F, M) = (F, M + r x F)
+    return list(T.T @ np.concatenate([np.asarray(force, float), np.asarray(moment, float)]))[3:]
+
+
+def torque_value(torque: float | str) -> float | str:
+    """A static torque [N m]: a finite number, or ``"reaction"`` (the torque that balances
+    the others, found with the operating point).
+
+    >>> torque_value(3), torque_value("reaction")
+    (3.0, 'reaction')
+    """
+    if isinstance(torque, str):
+        if torque != "reaction":
+            raise ModelError(f"`torque` must be a number [N m] or 'reaction', got {torque!r}")
+        return torque
+    try:
+        value = float(torque)
+    except (TypeError, ValueError):
+        raise ModelError(f"`torque` must be a number [N m] or 'reaction', got {torque!r}") from None
+    if not np.isfinite(value):
+        raise ModelError(f"`torque` must be finite, got {value!r}")
+    return value
 
 
 def gravity_load(
@@ -41,9 +96,7 @@ def gravity_load(
     >>> f[0]
     array([  0.  , -19.62,   0.  ,   0.  ,   0.  ,   0.  ])
     """
-    g = np.asarray(gravity, dtype=float).reshape(-1)
-    if g.shape != (3,) or not np.all(np.isfinite(g)):
-        raise ModelError(f"`gravity` must be a finite 3-vector [m/s^2], got {gravity!r}")
+    g = gravity_vector(gravity)
     field = np.tile(np.concatenate([g, np.zeros(3)]), n_nodes)
     out: dict[int, np.ndarray] = {}
     for k, Mk in M.items():

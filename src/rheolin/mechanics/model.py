@@ -21,81 +21,34 @@ A rigid rotor on an anisotropic bearing with a static unbalance, turning at 100 
 
 from __future__ import annotations
 
-import functools
-import inspect
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Sequence
 from fractions import Fraction
 from pathlib import Path
-from typing import Any, ParamSpec, TypeVar
+from typing import Any
 
 import numpy as np
 
 from ..errors import ModelError
 from .assembly import Assembled
-from .bearing_table import SpeedTable
-from .condensed import CondensedBody, load_condensed
-from .gears import rectangular_wave_coefficients
-from .joints import COMPONENTS, expand_matrix, lever
-from .rigid import RigidNode, disk, static_unbalance
-from .rigid import couple_unbalance as _add_couple
+from .condensed import condensed_body
+from .gears import mesh_record
+from .items import Body, ModelData, positive, recorded
+from .joints import bearing_record, link_components
+from .loads import gravity_vector, moment_at_node, torque_value
+from .preload import OperatingPoint, preloaded_template
+from .preload import operating_point as solve_operating_point
+from .rigid import RigidNode, disk_node
+from .rolling import rolling_record
 from .rotation import unit_axis
-from .sections import Section, element_materials, material_constants
-from .shaft import ShaftLayer, circular_layer
+from .sections import Section
+from .shaft import layer_elements, shaft_layers, shaft_materials, shaft_nodes, tube_layers
 from .speeds import GearPair, SpeedPlan
 from .template import SpeedTemplate, assemble_model, model_speed_plan
 
 __all__ = ["Assembled", "Model"]
 
-_P = ParamSpec("_P")
-_R = TypeVar("_R")
 
-
-def _recorded(method: Callable[_P, _R]) -> Callable[_P, _R]:
-    """Record a successful ``add_*`` call (its explicit arguments) in ``model.calls``: the
-    model file is these calls one to one (:meth:`Model.to_toml`)."""
-    sig = inspect.signature(method)
-
-    @functools.wraps(method)
-    def wrapper(*args: _P.args, **kwargs: _P.kwargs) -> _R:
-        out = method(*args, **kwargs)
-        bound = sig.bind(*args, **kwargs).arguments
-        model = bound.pop("self")
-        model.calls.append((method.__name__, dict(bound)))
-        return out
-
-    return wrapper
-
-
-@dataclass
-class _Body:
-    name: str
-    kind: str  # "shaft" | "rigid" | "condensed"
-    axis: np.ndarray
-    positions: np.ndarray  # (n_nodes, 3)
-    speed_ratio: Fraction | None
-    data: dict[str, Any] = field(default_factory=dict)
-    disks: dict[int, RigidNode] = field(default_factory=dict)
-
-
-def _shaft_constants(
-    material: str | None,
-    elastic_modulus: Any,
-    density: Any,
-    poisson_ratio: Any,
-    shear_modulus: Any,
-    where: str,
-) -> tuple[Any, Any, Any]:
-    """Elastic modulus, density and Poisson's ratio (not needed with a shear modulus): given,
-    or from the named ``material``; refused when neither (rheolin assumes no material)."""
-    need = {"elastic_modulus": elastic_modulus, "density": density}
-    if shear_modulus is None:
-        need["poisson_ratio"] = poisson_ratio
-    c = material_constants(material, need, where)
-    return c["elastic_modulus"], c["density"], c.get("poisson_ratio", poisson_ratio)
-
-
-class Model:
+class Model(ModelData):
     """A transmission: bodies (shafts, rigid bodies), disks, joints, gear meshes and loads.
 
     Parameters
@@ -111,27 +64,8 @@ class Model:
     def __init__(
         self, input_body: str | None = None, unbalance_reference: Sequence[float] | None = None
     ) -> None:
-        self.input_body = input_body
-        self.unbalance_reference = (
-            None if unbalance_reference is None else tuple(float(v) for v in unbalance_reference)
-        )
-        ref = np.asarray(self.unbalance_reference or (1.0, 0.0, 0.0), dtype=float)
-        if ref.shape != (3,) or not np.all(np.isfinite(ref)) or not np.any(ref):
-            raise ModelError(
-                f"`unbalance_reference` must be a nonzero 3-vector, got {unbalance_reference!r}"
-            )
-        self.bodies: dict[str, _Body] = {}
-        self.joints: dict[str, dict[str, Any]] = {}
-        self.meshes: dict[str, dict[str, Any]] = {}
-        self.forces: dict[str, dict[str, Any]] = {}
-        self.links: dict[str, dict[str, Any]] = {}
-        #: load-dependent joints and applied torques (operating point: mechanics.preload)
-        self.rolling: dict[str, dict[str, Any]] = {}
-        self.torques: dict[str, dict[str, Any]] = {}
-        self.gravity: np.ndarray | None = None
-        self._operating: dict[tuple[float, int], Any] = {}
-        #: ``(method, arguments)`` of every ``add_*``/``set_gravity`` call, in order.
-        self.calls: list[tuple[str, dict[str, Any]]] = []
+        super().__init__(input_body, unbalance_reference)
+        self._operating: dict[tuple[float, int], OperatingPoint] = {}
 
     @classmethod
     def from_ross(cls, rotor: Any) -> Model:
@@ -151,13 +85,7 @@ class Model:
         return model_to_toml(self, path)
 
     # ------------------------------------------------------------------ bodies
-    def _new_body(self, name: str, field_name: str = "name") -> None:
-        if not isinstance(name, str) or not name:
-            raise ModelError(f"`{field_name}` must be a non-empty string, got {name!r}")
-        if name in self.bodies:
-            raise ModelError(f"`{field_name}`: a body named {name!r} already exists")
-
-    @_recorded
+    @recorded
     def add_shaft(
         self,
         name: str,
@@ -220,42 +148,16 @@ class Model:
         >>> round(m.bodies["s"].data["layers"][0][0].material.nu, 4)
         0.2963
         """
-        self._new_body(name)
-        z = np.asarray(positions, dtype=float).ravel()
-        if z.size < 2 or np.any(np.diff(z) <= 0):
-            raise ModelError("`positions` must hold >= 2 strictly increasing axial coordinates")
-        e = unit_axis(axis, "axis")
-        pts = np.asarray(origin, float) + np.outer(z, e)
-        n_el = z.size - 1
-        E, rho, nu = _shaft_constants(
-            material, elastic_modulus, density, poisson_ratio, shear_modulus, f"add_shaft({name!r})"
-        )
-        materials = element_materials(n_el, E, rho, nu, shear_modulus, material_damping)
-        if section is not None:
-            if not isinstance(section, Section):
-                raise ModelError("`section` must be a rheolin.mechanics.sections.Section")
-            if outer_diameter_right is not None or inner_diameter_right is not None:
-                raise ModelError("`outer_diameter_right`/`inner_diameter_right` need diameters")
-            layers = [[ShaftLayer(mat, section=section)] for mat in materials]
-        elif outer_diameter is None:
-            raise ModelError("give `outer_diameter` (circular shaft) or `section`")
-        else:
-            do = _per_element(outer_diameter, n_el, "outer_diameter")
-            di = _per_element(inner_diameter, n_el, "inner_diameter")
-            dor = (
-                do
-                if outer_diameter_right is None
-                else _per_element(outer_diameter_right, n_el, "outer_diameter_right")
-            )
-            dir_ = (
-                di
-                if inner_diameter_right is None
-                else _per_element(inner_diameter_right, n_el, "inner_diameter_right")
-            )
-            layers = [
-                [circular_layer(mat, a, b, c, d)]
-                for mat, a, b, c, d in zip(materials, do, di, dor, dir_, strict=True)
-            ]
+        self.new_body(name)
+        z, e, pts = shaft_nodes(positions, axis, origin)
+        materials = shaft_materials(
+            z.size - 1, material, elastic_modulus, density, poisson_ratio, shear_modulus,
+            material_damping, f"add_shaft({name!r})",
+        )  # fmt: skip
+        layers = shaft_layers(
+            materials, section, outer_diameter, inner_diameter, outer_diameter_right,
+            inner_diameter_right,
+        )  # fmt: skip
         ratio = None if speed_ratio is None else Fraction(speed_ratio)
         sections = [lay[0].section for lay in layers]
         data = {
@@ -265,9 +167,9 @@ class Model:
             "material": materials[0],
             "extra_layers": [],
         }
-        self.bodies[name] = _Body(name, "shaft", e, pts, ratio, data)
+        self.bodies[name] = Body(name, "shaft", e, pts, ratio, data)
 
-    @_recorded
+    @recorded
     def add_shaft_layer(
         self,
         shaft: str,
@@ -295,49 +197,20 @@ class Model:
         >>> [len(x) for x in m.bodies["s"].data["layers"]]
         [1, 2]
         """
-        b = self._body(shaft, "shaft")
-        if b.kind != "shaft":
-            raise ModelError(f"`shaft`: body {shaft!r} is a {b.kind} body, not a shaft")
-        n_el = len(b.positions) - 1
-        idx = [int(i) for i in np.atleast_1d(np.asarray(elements)).ravel()]
-        if not idx or any(not 0 <= i < n_el for i in idx):
-            raise ModelError(f"`elements` must be element indices in [0, {n_el}), got {elements!r}")
-        k = len(idx)
-        E, rho, nu = _shaft_constants(
-            material,
-            elastic_modulus,
-            density,
-            poisson_ratio,
-            shear_modulus,
-            f"add_shaft_layer({shaft!r})",
+        b = self.body(shaft, "shaft")
+        idx = layer_elements(b.kind, shaft, len(b.positions) - 1, elements)
+        mats = shaft_materials(
+            len(idx), material, elastic_modulus, density, poisson_ratio, shear_modulus,
+            b.data["material"].damping_beta, f"add_shaft_layer({shaft!r})",
+        )  # fmt: skip
+        layers, diameters = tube_layers(
+            mats, outer_diameter, inner_diameter, outer_diameter_right, inner_diameter_right
         )
-        mats = element_materials(k, E, rho, nu, shear_modulus, b.data["material"].damping_beta)
-        do = _per_element(outer_diameter, k, "outer_diameter")
-        di = _per_element(inner_diameter, k, "inner_diameter")
-        dor = (
-            do
-            if outer_diameter_right is None
-            else _per_element(outer_diameter_right, k, "outer_diameter_right")
-        )
-        dir_ = (
-            di
-            if inner_diameter_right is None
-            else _per_element(inner_diameter_right, k, "inner_diameter_right")
-        )
-        for j, i in enumerate(idx):
-            b.data["layers"][i].append(circular_layer(mats[j], do[j], di[j], dor[j], dir_[j]))
-        b.data["extra_layers"].append(
-            dict(
-                elements=idx,
-                outer_diameter=do,
-                inner_diameter=di,
-                outer_diameter_right=dor,
-                inner_diameter_right=dir_,
-                materials=mats,
-            )
-        )
+        for i, layer in zip(idx, layers, strict=True):
+            b.data["layers"][i].append(layer)
+        b.data["extra_layers"].append(dict(elements=idx, **diameters, materials=mats))
 
-    @_recorded
+    @recorded
     def add_rigid_body(
         self,
         name: str,
@@ -348,14 +221,14 @@ class Model:
         speed_ratio: Fraction | int | None = None,
     ) -> None:
         """A body made of one rigid node (e.g. a gear on its own bearings, a housing mass)."""
-        self._new_body(name)
+        self.new_body(name)
         e = unit_axis(axis, "axis")
         pts = np.asarray(position, float).reshape(1, 3)
         ratio = None if speed_ratio is None else Fraction(speed_ratio)
-        self.bodies[name] = _Body(name, "rigid", e, pts, ratio)
-        self.bodies[name].disks[0] = RigidNode(mass, np.asarray(inertia, dtype=float))
+        rigid = RigidNode(mass, np.asarray(inertia, dtype=float))
+        self.bodies[name] = Body(name, "rigid", e, pts, ratio, disks={0: rigid})
 
-    @_recorded
+    @recorded
     def add_condensed_body(
         self,
         name: str,
@@ -388,41 +261,13 @@ class Model:
         >>> m.bodies["housing"].kind
         'condensed'
         """
-        self._new_body(name)
-        if body is not None:
-            if path is not None or M is not None:
-                raise ModelError("give one of `body`, `path` or the matrices `M`, `K`")
-            M, K, D, G = body.M, body.K, body.D, body.G
-        if positions is None:
-            if body is not None:
-                positions = body.positions
-            elif path is not None:
-                with np.load(path) as z:
-                    if "positions" not in z.files:
-                        raise ModelError("`positions`: required (the file has no `positions`)")
-                    positions = z["positions"]
-            else:
-                raise ModelError("`positions`: give one 3-vector per node")
-        pts = np.asarray(positions, dtype=float).reshape(-1, 3)
-        nodes = list(range(len(pts)))  # body-local; the assembly maps them to global nodes
-        axes = None if frame is None else np.asarray(frame, dtype=float)
-        if body is not None:
-            cb = CondensedBody(
-                M=M, K=K, nodes=nodes, D=D, G=G, frame=axes, n_modes=body.n_modes, C=body.C
-            )
-        elif path is not None:
-            if M is not None or K is not None:
-                raise ModelError("give either `path` or the matrices `M`, `K`, not both")
-            cb = load_condensed(path, nodes=nodes, frame=axes)
-        else:
-            if M is None or K is None:
-                raise ModelError("a condensed body needs `M` and `K` (or a `path`)")
-            cb = CondensedBody(M=M, K=K, nodes=nodes, D=D, G=G, frame=axes)
+        self.new_body(name)
+        pts, cb = condensed_body(positions, M, K, D, G, frame, path, body)
         ratio = None if speed_ratio is None else Fraction(speed_ratio)
         e = unit_axis(axis, "axis")
-        self.bodies[name] = _Body(name, "condensed", e, pts, ratio, {"condensed": cb})
+        self.bodies[name] = Body(name, "condensed", e, pts, ratio, {"condensed": cb})
 
-    @_recorded
+    @recorded
     def add_disk(
         self,
         body: str,
@@ -452,40 +297,16 @@ class Model:
         node carries the disk's mass and inertia with their lever arm, coupling translation and
         tilt exactly (no extra node, no stiff link).
         """
-        b = self._body(body, "body")
-        node = self._node(b, node)
-        e = b.axis
-        if mass is not None or inertia is not None:
-            if mass is None or inertia is None:
-                raise ModelError("`mass` and `inertia` must be given together")
-            rn = RigidNode(mass, np.asarray(inertia, dtype=float))
-        elif outer_diameter is not None:
-            if width is None:
-                raise ModelError("`width` is required with `outer_diameter`")
-            rho = material_constants(material, {"density": density}, f"add_disk({body!r})")
-            rn = disk(outer_diameter, width, float(rho["density"]), inner_diameter, axis=e)
-        elif node in b.disks:
-            rn = b.disks[node]
-        else:
-            raise ModelError("give `mass` and `inertia`, or `outer_diameter` and `width`")
-        if unbalance:
-            rn = static_unbalance(rn, unbalance, unbalance_angle, axis=e,
-                                  reference=self.unbalance_reference)  # fmt: skip
-        if couple_unbalance:
-            rn = _add_couple(rn, couple_unbalance, couple_angle, axis=e,
-                             reference=self.unbalance_reference)  # fmt: skip
-        if node in b.disks and (mass is not None or outer_diameter is not None):
-            raise ModelError(f"`node`: node {node} of body {body!r} already has a disk")
-        if axial_offset:
-            if not np.isfinite(axial_offset):
-                raise ModelError(f"`axial_offset` must be finite, got {axial_offset!r}")
-            if rn.mass <= 0.0:
-                raise ModelError("`axial_offset` needs a disk with mass")
-            rn = RigidNode(rn.mass, rn.inertia, rn.com + float(axial_offset) * np.asarray(e))
-        b.disks[node] = rn
+        b = self.body(body, "body")
+        node = self.node(b, node)
+        b.disks[node] = disk_node(
+            b.disks.get(node), b.axis, self.unbalance_reference, body, node, mass, inertia,
+            outer_diameter, width, density, inner_diameter, unbalance, unbalance_angle,
+            couple_unbalance, couple_angle, material, axial_offset,
+        )  # fmt: skip
 
     # ------------------------------------------------------------------ joints and loads
-    @_recorded
+    @recorded
     def add_bearing(
         self,
         name: str,
@@ -538,57 +359,16 @@ class Model:
         >>> float(m.bearing_coefficients("b", 200.0)[0][0, 1])
         3000000.0
         """
-        self._joint_nodes(name, body, node, other_body, other_node)
+        self.joint_nodes(name, body, node, other_body, other_node)
         if frame is not None:
-            self._body(frame, "frame")
-        if frame is not None and (offset is not None or other_offset is not None):
-            raise ModelError("`offset`: only for joints in the inertial frame (frame=None)")
-        if other_offset is not None and other_body is None:
-            raise ModelError("`other_offset` needs `other_body` (a joint to ground has one side)")
-        lever(offset)  # checked: a finite 3-vector
-        lever(other_offset)
-        pre = None
-        if preload is not None:
-            pre = np.asarray(preload, dtype=float).ravel()
-            if pre.size not in (3, 6) or not np.all(np.isfinite(pre)):
-                raise ModelError(
-                    "`preload` must be 3 (force) or 6 (force, moment) finite numbers, "
-                    f"got {preload!r}"
-                )
-            if frame is not None or speeds is not None:
-                raise ModelError("`preload`: only for constant joints in the inertial frame")
-            pre = np.concatenate([pre, np.zeros(6 - pre.size)])
-        table = None
-        if speeds is None:
-            K = expand_matrix(stiffness, components, "stiffness")
-            D = expand_matrix(damping, components, "damping")
-            M = expand_matrix(mass, components, "mass")
-        else:
-            if frame is not None:
-                raise ModelError("`speeds`: speed-dependent coefficients need `frame=None`")
-            n = np.asarray(speeds, dtype=float).size
-            tabs = [
-                _per_speed(x, n, components, fld)
-                for x, fld in ((stiffness, "stiffness"), (damping, "damping"), (mass, "mass"))
-            ]
-            table = SpeedTable(speeds, tabs[0], tabs[1], tabs[2], interpolation, bool(extrapolate))
-            K, D, M = (np.zeros((6, 6)) for _ in range(3))
-        self.joints[name] = dict(
-            body=body,
-            node=node,
-            other=(other_body, other_node),
-            K=K,
-            D=D,
-            M=M,
-            frame=frame,
-            table=table,
-            components=None if components is None else list(components),
-            offset=None if offset is None else [float(v) for v in offset],
-            other_offset=None if other_offset is None else [float(v) for v in other_offset],
-            preload=pre,
-        )
+            self.body(frame, "frame")
+        joint = bearing_record(
+            stiffness, damping, mass, components, frame, speeds, interpolation, extrapolate,
+            offset, other_offset, other_body is not None, preload,
+        )  # fmt: skip
+        self.joints[name] = dict(body=body, node=node, other=(other_body, other_node), **joint)
 
-    @_recorded
+    @recorded
     def add_rolling_bearing(
         self,
         name: str,
@@ -625,30 +405,15 @@ class Model:
         >>> sorted(m.rolling)
         ['a']
         """
-        from .rolling import RollingLaw
-
-        self._joint_nodes(name, body, node, other_body, other_node)
-        rolling_law = RollingLaw(
-            law=law,
-            kind=kind,
-            stiffness=float(stiffness),
-            elements=elements,
-            clearance=float(clearance),
-            angle=float(angle),
-            deflection=None if deflection is None else np.asarray(deflection, float),
-            force_table=None if force is None else np.asarray(force, float),
+        self.joint_nodes(name, body, node, other_body, other_node)
+        law_damping = rolling_record(
+            law, kind, stiffness, elements, clearance, angle, deflection, force, damping
         )
-        if not (np.isfinite(damping) and damping >= 0):
-            raise ModelError(f"`damping` must be >= 0 [N s/m], got {damping!r}")
         self.rolling[name] = dict(
-            body=body,
-            node=int(node),
-            other=(other_body, other_node),
-            law=rolling_law,
-            damping=float(damping),
+            body=body, node=int(node), other=(other_body, other_node), **law_damping
         )
 
-    @_recorded
+    @recorded
     def add_torque(self, name: str, body: str, node: int, torque: float | str = "reaction") -> None:
         """A static torque [N m] about the body's axis at a node (positive: right-handed
         about the axis): the input torque, or the output load. ``torque="reaction"``: the
@@ -662,57 +427,20 @@ class Model:
         >>> m.torques["input"]["torque"]
         12.5
         """
-        self._new_item(name, self.torques)
-        self._node(self._body(body, "body"), node)
-        if isinstance(torque, str):
-            if torque != "reaction":
-                raise ModelError(f"`torque` must be a number [N m] or 'reaction', got {torque!r}")
-        else:
-            try:
-                torque = float(torque)
-            except (TypeError, ValueError):
-                raise ModelError(
-                    f"`torque` must be a number [N m] or 'reaction', got {torque!r}"
-                ) from None
-            if not np.isfinite(torque):
-                raise ModelError(f"`torque` must be finite, got {torque!r}")
-        self.torques[name] = dict(body=body, node=int(node), torque=torque)
+        self.new_item(name, self.torques)
+        self.node(self.body(body, "body"), node)
+        self.torques[name] = dict(body=body, node=int(node), torque=torque_value(torque))
 
-    @property
-    def preloaded(self) -> bool:
-        """True when the model declares torques or load-dependent joints: it is solved about
-        its operating point (:meth:`operating_point`)."""
-        return bool(self.rolling or self.torques) or any(
-            g.get("load_law") is not None for g in self.meshes.values()
-        )
-
-    def operating_point(self, speed: float) -> Any:
+    def operating_point(self, speed: float) -> OperatingPoint:
         """The static equilibrium under the model's static loads and torques at input
         ``speed`` [rad/s], and the model linearized there
         (:class:`rheolin.mechanics.preload.OperatingPoint`); cached per speed."""
-        from .preload.equilibrium import operating_point
-
-        key = (_positive(speed, "speed"), len(self.calls))  # a changed model: computed anew
+        key = (positive(speed, "speed"), len(self.calls))  # a changed model: computed anew
         if key not in self._operating:
             if len(self._operating) > 64:
                 self._operating.clear()
-            self._operating[key] = operating_point(self, key[0])
+            self._operating[key] = solve_operating_point(self, key[0])
         return self._operating[key]
-
-    def _new_joint(self, name: str) -> None:
-        self._new_item(name, self.joints)
-        self._new_item(name, self.rolling)
-
-    def _joint_nodes(
-        self, name: str, body: str, node: int, other_body: str | None, other_node: int | None
-    ) -> None:
-        """Check a new joint's name and nodes (``other_*``: the other side, or ground)."""
-        self._new_joint(name)
-        self._node(self._body(body, "body"), node)
-        if (other_body is None) != (other_node is None):
-            raise ModelError("`other_body` and `other_node` must be given together")
-        if other_body is not None:
-            self._node(self._body(other_body, "other_body"), other_node)
 
     def bearing_coefficients(
         self, name: str, speed: float
@@ -725,7 +453,7 @@ class Model:
             return j["table"].at(speed)
         return j["K"], j["D"], j["M"]
 
-    @_recorded
+    @recorded
     def add_gear_mesh(
         self,
         name: str,
@@ -769,53 +497,23 @@ class Model:
         scaled by the operating (tangent) stiffness over its mean. The model is then solved
         about its operating point (:mod:`rheolin.mechanics.preload`).
         """
-        self._new_item(name, self.meshes)
+        self.new_item(name, self.meshes)
         for fld, bname, node in (
             ("pinion_body", pinion_body, pinion_node),
             ("gear_body", gear_body, gear_node),
         ):
-            self._node(self._body(bname, fld), node)
+            self.node(self.body(bname, fld), node)
         if pinion_body == gear_body:
             raise ModelError("`gear_body` must differ from `pinion_body`")
         pair = GearPair(pinion_body, gear_body, pinion_teeth, gear_teeth)
-        if stiffness is None:
-            if None in (contact_ratio, single_stiffness, double_stiffness):
-                raise ModelError(
-                    "give `stiffness`, or `contact_ratio`, `single_stiffness` and "
-                    "`double_stiffness` (rectangular wave)"
-                )
-            assert contact_ratio is not None and single_stiffness is not None
-            assert double_stiffness is not None
-            stiffness = rectangular_wave_coefficients(
-                contact_ratio, single_stiffness, double_stiffness, stiffness_harmonics
-            )
-        _positive(module, "module")
-        mesh_law = None
-        if load_law is not None:
-            from .rolling import MeshLoadLaw
+        mesh = mesh_record(
+            module, pressure_angle, helix_angle, stiffness, contact_ratio, single_stiffness,
+            double_stiffness, stiffness_harmonics, damping, transmission_error, side,
+            center_direction, load_law, face_width, load_forces, load_stiffness,
+        )  # fmt: skip
+        self.meshes[name] = dict(pair=pair, pinion_node=pinion_node, gear_node=gear_node, **mesh)
 
-            mesh_law = MeshLoadLaw(
-                law=load_law,
-                face_width=float(face_width or 0.0),
-                forces=None if load_forces is None else np.asarray(load_forces, float),
-                stiffness=None if load_stiffness is None else np.asarray(load_stiffness, float),
-            )
-        self.meshes[name] = dict(
-            pair=pair,
-            pinion_node=pinion_node,
-            gear_node=gear_node,
-            module=float(module),
-            pressure_angle=float(pressure_angle),
-            helix_angle=float(helix_angle),
-            stiffness=stiffness,
-            damping=float(damping),
-            transmission_error=transmission_error,
-            side=side,
-            center_direction=center_direction,
-            load_law=mesh_law,
-        )
-
-    @_recorded
+    @recorded
     def add_force(
         self,
         name: str,
@@ -834,26 +532,21 @@ class Model:
         static force. ``offset`` [m]: the force acts at a point that far from the node, rigidly
         attached to it; the node carries it with the moment ``r x F`` added.
         """
-        self._new_item(name, self.forces)
-        self._node(self._body(body, "body"), node)
+        self.new_item(name, self.forces)
+        self.node(self.body(body, "body"), node)
         ref = body if reference_body is None else reference_body
-        self._body(ref, "reference_body")
-        T = lever(offset)
-        if T is not None:  # F at r: the node's load is T^T (F, M) = (F, M + r x F)
-            moment = list(
-                T.T @ np.concatenate([np.asarray(force, float), np.asarray(moment, float)])
-            )[3:]
+        self.body(ref, "reference_body")
         self.forces[name] = dict(
             body=body,
             node=node,
             force=force,
-            moment=moment,
+            moment=moment_at_node(force, moment, offset),
             order=Fraction(order),
             phase=float(phase),
             reference=ref,
         )
 
-    @_recorded
+    @recorded
     def add_rigid_link(
         self,
         name: str,
@@ -877,29 +570,20 @@ class Model:
         >>> m.assemble(1.0).system.constraint.pivots.size
         6
         """
-        self._new_item(name, self.links)
-        self._node(self._body(body, "body"), node)
-        self._node(self._body(other_body, "other_body"), other_node)
+        self.new_item(name, self.links)
+        self.node(self.body(body, "body"), node)
+        self.node(self.body(other_body, "other_body"), other_node)
         if (body, node) == (other_body, other_node):
             raise ModelError("`other_node`: a rigid link needs two different nodes")
-        comps = list(COMPONENTS) if components is None else list(components)
-        bad = [c for c in comps if c not in COMPONENTS]
-        if bad or not comps or len(set(comps)) != len(comps):
-            raise ModelError(
-                f"`components` must be distinct names from {list(COMPONENTS)}, got {components!r}"
-            )
         self.links[name] = dict(
             body=body, node=int(node), other_body=other_body, other_node=int(other_node),
-            components=comps,
+            components=link_components(components),
         )  # fmt: skip
 
-    @_recorded
+    @recorded
     def set_gravity(self, gravity: Sequence[float] = (0.0, -9.81, 0.0)) -> None:
         """Uniform gravity [m/s^2] in global axes (static load ``M g`` on every body)."""
-        g = np.asarray(gravity, dtype=float).ravel()
-        if g.shape != (3,) or not np.all(np.isfinite(g)):
-            raise ModelError(f"`gravity` must be a finite 3-vector [m/s^2], got {gravity!r}")
-        self.gravity = g
+        self.gravity = gravity_vector(gravity)
 
     # ------------------------------------------------------------------ assembly
     def speed_plan(self) -> SpeedPlan:
@@ -909,7 +593,7 @@ class Model:
     def assemble(self, speed: float) -> Assembled:
         """Assemble at input speed ``speed`` [rad/s] (> 0); see :class:`Assembled`. A
         :attr:`preloaded` model is assembled linearized about its operating point."""
-        speed = _positive(speed, "speed")
+        speed = positive(speed, "speed")
         if self.preloaded:
             return self.operating_point(speed).model.assemble(speed)
         return assemble_model(self, speed)
@@ -920,61 +604,5 @@ class Model:
         changing the model. A :attr:`preloaded` model whose static stiffness does not
         depend on the speed is linearized once; otherwise at each speed."""
         if self.preloaded:
-            from .preload.equilibrium import preloaded_template
-
             return preloaded_template(self)
         return SpeedTemplate(self)
-
-    def _body(self, name: str, field_name: str) -> _Body:
-        if name not in self.bodies:
-            raise ModelError(f"`{field_name}`: no body named {name!r}; bodies: {list(self.bodies)}")
-        return self.bodies[name]
-
-    @staticmethod
-    def _node(b: _Body, node: Any) -> int:
-        if (
-            isinstance(node, bool)
-            or not isinstance(node, int | np.integer)
-            or not (0 <= node < len(b.positions))
-        ):
-            raise ModelError(
-                f"`node` must be an integer in [0, {len(b.positions)}) for body "
-                f"{b.name!r}, got {node!r}"
-            )
-        return int(node)
-
-    @staticmethod
-    def _new_item(name: str, table: dict[str, Any]) -> None:
-        if not isinstance(name, str) or not name:
-            raise ModelError(f"`name` must be a non-empty string, got {name!r}")
-        if name in table:
-            raise ModelError(f"`name`: {name!r} is already used")
-
-
-def _positive(x: Any, name: str) -> float:
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        raise ModelError(f"`{name}` must be a positive number, got {x!r}") from None
-    if not np.isfinite(v) or v <= 0:
-        raise ModelError(f"`{name}` must be a positive finite number, got {x!r}")
-    return v
-
-
-def _per_speed(value: Any, n: int, components: Sequence[str] | None, name: str) -> np.ndarray:
-    """One 6x6 matrix per speed from a table (or one value for every speed)."""
-    a = np.asarray(value, dtype=float)
-    if a.ndim == 0:
-        return np.array([expand_matrix(float(a), components, name)] * n)
-    if a.shape[0] != n:
-        raise ModelError(f"`{name}`: give one entry per speed ({n}), got {a.shape[0]}")
-    return np.array([expand_matrix(x, components, f"{name}[{i}]") for i, x in enumerate(a)])
-
-
-def _per_element(x: Any, n: int, name: str) -> np.ndarray:
-    a = np.asarray(x, dtype=float).ravel()
-    if a.size == 1:
-        a = np.full(n, a[0])
-    if a.size != n or not np.all(np.isfinite(a)) or np.any(a < 0):
-        raise ModelError(f"`{name}` must be one value or one per element ({n}), >= 0")
-    return a

@@ -27,11 +27,13 @@ import numpy as np
 from ..errors import ModelError
 from ._term import SpeedTerm, Term
 from .rotation import clean_series, derivative, rotation_series, series_product, skew, unit_axis
+from .sections import material_constants
 
 __all__ = [
     "RigidNode",
     "couple_unbalance",
     "disk",
+    "disk_node",
     "rigid_node_coefficients",
     "static_unbalance",
 ]
@@ -337,3 +339,59 @@ def couple_unbalance(
     e, a, _ = _perp_direction(axis, angle, reference)
     dJ = -float(couple) * (np.outer(a, e) + np.outer(e, a))
     return RigidNode(node.mass, node.inertia + dJ, node.com)
+
+
+def disk_node(
+    existing: RigidNode | None,
+    axis: np.ndarray,
+    reference: object,
+    body: str,
+    node: int,
+    mass: float | None,
+    inertia: object | None,
+    outer_diameter: float | None,
+    width: float | None,
+    density: float | None,
+    inner_diameter: float,
+    unbalance: float,
+    unbalance_angle: float,
+    couple_unbalance_: float,
+    couple_angle: float,
+    material: str | None,
+    axial_offset: float,
+) -> RigidNode:
+    """The rigid node of a disk at ``node`` of ``body`` (``Model.add_disk`` names the
+    arguments): its mass and inertia, or its geometry and density (or named ``material``),
+    or the ``existing`` disk there; then its unbalances and axial offset.
+
+    >>> n = disk_node(None, np.array([0.0, 0.0, 1.0]), None, "s", 0, 2.0, [1, 1, 1], None,
+    ...               None, None, 0.0, 1e-3, 0.0, 0.0, 0.0, None, 0.1)
+    >>> n.com.tolist()
+    [0.0005, 0.0, 0.1]
+    """
+    if mass is not None or inertia is not None:
+        if mass is None or inertia is None:
+            raise ModelError("`mass` and `inertia` must be given together")
+        rn = RigidNode(mass, np.asarray(inertia, dtype=float))
+    elif outer_diameter is not None:
+        if width is None:
+            raise ModelError("`width` is required with `outer_diameter`")
+        rho = material_constants(material, {"density": density}, f"add_disk({body!r})")
+        rn = disk(outer_diameter, width, float(rho["density"]), inner_diameter, axis=axis)
+    elif existing is not None:
+        rn = existing
+    else:
+        raise ModelError("give `mass` and `inertia`, or `outer_diameter` and `width`")
+    if unbalance:
+        rn = static_unbalance(rn, unbalance, unbalance_angle, axis=axis, reference=reference)
+    if couple_unbalance_:
+        rn = couple_unbalance(rn, couple_unbalance_, couple_angle, axis=axis, reference=reference)
+    if existing is not None and (mass is not None or outer_diameter is not None):
+        raise ModelError(f"`node`: node {node} of body {body!r} already has a disk")
+    if axial_offset:
+        if not np.isfinite(axial_offset):
+            raise ModelError(f"`axial_offset` must be finite, got {axial_offset!r}")
+        if rn.mass <= 0.0:
+            raise ModelError("`axial_offset` needs a disk with mass")
+        rn = RigidNode(rn.mass, rn.inertia, rn.com + float(axial_offset) * np.asarray(axis))
+    return rn

@@ -28,6 +28,7 @@ reduction at low line loads: ``k(F) = k0 (F / (b 100 N/mm))^(1/4)`` below
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -36,7 +37,7 @@ from scipy.interpolate import PchipInterpolator
 
 from ..errors import ModelError
 
-__all__ = ["EXPONENTS", "MeshLoadLaw", "RollingLaw"]
+__all__ = ["EXPONENTS", "MeshLoadLaw", "RollingLaw", "rolling_record"]
 
 #: Load-deflection exponents of one rolling element: point contact (ball), line contact
 #: (roller, Palmgren's 10/9).
@@ -278,3 +279,37 @@ class MeshLoadLaw:
         F = brentq(g, 0.0, hi, xtol=1e-14 * hi, rtol=4 * np.finfo(float).eps, maxiter=500)
         _, kt, _ = self.at(F, k0)
         return float(s * F), float(kt)
+
+
+def rolling_record(
+    law: str,
+    kind: str,
+    stiffness: float,
+    elements: int,
+    clearance: float,
+    angle: float,
+    deflection: Sequence[float] | None,
+    force: Sequence[float] | None,
+    damping: float,
+) -> dict[str, Any]:
+    """The law and radial damping of a rolling-element bearing, checked, as the model's
+    table of load-dependent joints holds them (``Model.add_rolling_bearing`` names the
+    arguments).
+
+    >>> r = rolling_record("radial", "roller", 1.5e9, 0, 0.0, 0.0, None, None, 300.0)
+    >>> r["law"].exponent == EXPONENTS["roller"], r["damping"]
+    (True, 300.0)
+    """
+    rolling_law = RollingLaw(
+        law=law,
+        kind=kind,
+        stiffness=float(stiffness),
+        elements=elements,
+        clearance=float(clearance),
+        angle=float(angle),
+        deflection=None if deflection is None else np.asarray(deflection, float),
+        force_table=None if force is None else np.asarray(force, float),
+    )
+    if not (np.isfinite(damping) and damping >= 0):
+        raise ModelError(f"`damping` must be >= 0 [N s/m], got {damping!r}")
+    return dict(law=rolling_law, damping=float(damping))

@@ -10,15 +10,33 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ..errors import ModelError
 from .beam import BeamMatrices, beam_body_matrices
 from .conical import conical_body_matrices
-from .sections import Material, Section, hollow_circular, solid_circular
+from .rotation import unit_axis
+from .sections import (
+    Material,
+    Section,
+    element_materials,
+    hollow_circular,
+    material_constants,
+    solid_circular,
+)
 
-__all__ = ["ShaftLayer", "circular_layer", "element_matrices"]
+__all__ = [
+    "ShaftLayer",
+    "circular_layer",
+    "element_matrices",
+    "layer_elements",
+    "shaft_layers",
+    "shaft_materials",
+    "shaft_nodes",
+    "tube_layers",
+]
 
 
 @dataclass(frozen=True)
@@ -103,3 +121,121 @@ def element_matrices(
     if total is None:
         raise ModelError("a shaft element needs at least one layer")
     return total
+
+
+# --------------------------------------------------------------------------- model input
+def _per_element(x: Any, n: int, name: str) -> np.ndarray:
+    a = np.asarray(x, dtype=float).ravel()
+    if a.size == 1:
+        a = np.full(n, a[0])
+    if a.size != n or not np.all(np.isfinite(a)) or np.any(a < 0):
+        raise ModelError(f"`{name}` must be one value or one per element ({n}), >= 0")
+    return a
+
+
+def shaft_nodes(
+    positions: Any, axis: Any, origin: Any
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(z, e, points)``: the axial node coordinates (>= 2, strictly increasing), the unit
+    spin axis and the nodes' global positions.
+
+    >>> z, e, p = shaft_nodes([0.0, 0.5], (0, 0, 2), (1.0, 0, 0))
+    >>> p.tolist()
+    [[1.0, 0.0, 0.0], [1.0, 0.0, 0.5]]
+    """
+    z = np.asarray(positions, dtype=float).ravel()
+    if z.size < 2 or np.any(np.diff(z) <= 0):
+        raise ModelError("`positions` must hold >= 2 strictly increasing axial coordinates")
+    e = unit_axis(axis, "axis")
+    return z, e, np.asarray(origin, float) + np.outer(z, e)
+
+
+def shaft_materials(
+    n: int,
+    material: str | None,
+    elastic_modulus: Any,
+    density: Any,
+    poisson_ratio: Any,
+    shear_modulus: Any,
+    damping_beta: float,
+    where: str,
+) -> list[Material]:
+    """One material per element: the constants given (per shaft or per element), the others
+    from the named ``material``; refused when neither (rheolin assumes no material).
+    Poisson's ratio is not needed with a shear modulus.
+
+    >>> [m.E for m in shaft_materials(2, "steel", [2e11, 2.1e11], None, None, None, 0.0, "s")]
+    [200000000000.0, 210000000000.0]
+    """
+    need = {"elastic_modulus": elastic_modulus, "density": density}
+    if shear_modulus is None:
+        need["poisson_ratio"] = poisson_ratio
+    c = material_constants(material, need, where)
+    nu = c.get("poisson_ratio", poisson_ratio)
+    return element_materials(n, c["elastic_modulus"], c["density"], nu, shear_modulus, damping_beta)
+
+
+def tube_layers(
+    materials: Sequence[Material],
+    outer: Any,
+    inner: Any,
+    outer_right: Any = None,
+    inner_right: Any = None,
+) -> tuple[list[ShaftLayer], dict[str, np.ndarray]]:
+    """One circular layer per material (element) and the diameters read: one value or one per
+    element, the right ends defaulting to the left ones.
+
+    >>> from rheolin.mechanics.sections import Material
+    >>> steel = Material(2.1e11, 7850.0, nu=0.3)
+    >>> layers, d = tube_layers([steel, steel], [0.05, 0.04], 0.0, outer_right=0.03)
+    >>> d["outer_diameter_right"].tolist(), layers[0].diameters
+    ([0.03, 0.03], (0.05, 0.0, 0.03, 0.0))
+    """
+    n = len(materials)
+    do = _per_element(outer, n, "outer_diameter")
+    di = _per_element(inner, n, "inner_diameter")
+    dor = do if outer_right is None else _per_element(outer_right, n, "outer_diameter_right")
+    dir_ = di if inner_right is None else _per_element(inner_right, n, "inner_diameter_right")
+    layers = [
+        circular_layer(mat, a, b, c, d)
+        for mat, a, b, c, d in zip(materials, do, di, dor, dir_, strict=True)
+    ]
+    diameters = {
+        "outer_diameter": do,
+        "inner_diameter": di,
+        "outer_diameter_right": dor,
+        "inner_diameter_right": dir_,
+    }
+    return layers, diameters
+
+
+def shaft_layers(
+    materials: Sequence[Material],
+    section: Section | None,
+    outer: Any,
+    inner: Any,
+    outer_right: Any,
+    inner_right: Any,
+) -> list[list[ShaftLayer]]:
+    """The layers of each element of a new shaft: one ``section`` for every element, or the
+    circular (tube) sections of the diameters."""
+    if section is not None:
+        if not isinstance(section, Section):
+            raise ModelError("`section` must be a rheolin.mechanics.sections.Section")
+        if outer_right is not None or inner_right is not None:
+            raise ModelError("`outer_diameter_right`/`inner_diameter_right` need diameters")
+        return [[ShaftLayer(mat, section=section)] for mat in materials]
+    if outer is None:
+        raise ModelError("give `outer_diameter` (circular shaft) or `section`")
+    layers, _ = tube_layers(materials, outer, inner, outer_right, inner_right)
+    return [[layer] for layer in layers]
+
+
+def layer_elements(kind: str, shaft: str, n_el: int, elements: Any) -> list[int]:
+    """The element indices a layer covers, on a body of ``kind`` named ``shaft``."""
+    if kind != "shaft":
+        raise ModelError(f"`shaft`: body {shaft!r} is a {kind} body, not a shaft")
+    idx = [int(i) for i in np.atleast_1d(np.asarray(elements)).ravel()]
+    if not idx or any(not 0 <= i < n_el for i in idx):
+        raise ModelError(f"`elements` must be element indices in [0, {n_el}), got {elements!r}")
+    return idx

@@ -12,7 +12,7 @@ those patterns: one vector operation per coefficient instead of rebuilding the e
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -25,13 +25,11 @@ from .assembly import Assembled
 from .beam import beam_speed_term
 from .bearing_table import SpeedTable
 from .gears import gear_mesh_term, line_of_action
+from .items import ModelData
 from .joints import COMPONENTS, coupling_speed_term, lever, pair_block
 from .loads import gravity_load, harmonic_force_term
 from .shaft import element_matrices
 from .speeds import SpeedPlan, propagate_speeds, speed_plan
-
-if TYPE_CHECKING:
-    from .model import Model
 
 __all__ = ["SpeedTemplate", "assemble_model", "model_speed_plan"]
 
@@ -104,7 +102,8 @@ class _Coefficient:
 
 
 class SpeedTemplate:
-    """A :class:`~rheolin.mechanics.model.Model` assembled once, evaluated at any speed.
+    """A model (:class:`~rheolin.mechanics.items.ModelData`) assembled once, evaluated at any
+    speed.
 
     The model is read when the template is made: change the model, make a new template.
 
@@ -125,7 +124,7 @@ class SpeedTemplate:
     True
     """
 
-    def __init__(self, model: Model) -> None:
+    def __init__(self, model: ModelData) -> None:
         plan = model_speed_plan(model)
         self.plan = plan
         self.node_index: dict[tuple[str, int], int] = {}
@@ -199,7 +198,7 @@ class SpeedTemplate:
                 if k >= 0:
                     self._loads.setdefault(k, np.zeros((_POWERS, self.n_dof), complex))[0] += v
 
-    def _body_terms(self, model: Model) -> list[SpeedTerm]:
+    def _body_terms(self, model: ModelData) -> list[SpeedTerm]:
         terms: list[SpeedTerm] = []
         for b in model.bodies.values():
             s = self.plan.spin[b.name]
@@ -282,6 +281,14 @@ class SpeedTemplate:
             out[c.name] = X
         return out
 
+    def static_depends_on_speed(self) -> bool:
+        """True when the static problem, the mean stiffness ``K_0`` and mean load ``f_0``,
+        changes with the speed: a speed table, or a term in ``w1`` or ``w1^2`` in either."""
+        K = self._K.patterns.get(0)
+        still = not self.tables and (K is None or not np.any(K[2][1:]))
+        f = self._loads.get(0)
+        return not (still and (f is None or not np.any(f[1:])))
+
     def load_polynomials(self) -> dict[int, np.ndarray]:
         """``{k: f_k^(p)}`` for the load harmonics ``k >= 0`` (shape ``(3, n)`` each)."""
         return {k: v.copy() for k, v in self._loads.items()}
@@ -337,8 +344,8 @@ class SpeedTemplate:
         )
 
 
-def model_speed_plan(model: Model) -> SpeedPlan:
-    """Exact speed ratios, ``w1 / speed`` and integer harmonics of a :class:`Model`."""
+def model_speed_plan(model: ModelData) -> SpeedPlan:
+    """Exact speed ratios, ``w1 / speed`` and integer harmonics of a model."""
     if not model.bodies:
         raise ModelError("the model has no bodies")
     inp = model.input_body or next(iter(model.bodies))
@@ -352,7 +359,7 @@ def model_speed_plan(model: Model) -> SpeedPlan:
 
 
 def _planes(
-    model: Model, dof: dict[tuple[str, int], np.ndarray]
+    model: ModelData, dof: dict[tuple[str, int], np.ndarray]
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """``(ix, iy)``: the (ux, uy) and (phix, phiy) DOFs of every node of the bodies along the
     global z axis (either sense), for gmres's whirl-pair preconditioner; None without any."""
@@ -370,7 +377,9 @@ def _planes(
     return np.array(ix, dtype=np.int64), np.array(iy, dtype=np.int64)
 
 
-def _links(model: Model, dof: dict[tuple[str, int], np.ndarray], n: int) -> LinearConstraint | None:
+def _links(
+    model: ModelData, dof: dict[tuple[str, int], np.ndarray], n: int
+) -> LinearConstraint | None:
     """The rigid links as one eliminated constraint ``q[pivots] = G q[keep]`` (chains of links
     substituted; a DOF constrained twice, or a loop, refused naming the links)."""
     if not model.links:
@@ -419,12 +428,12 @@ def _links(model: Model, dof: dict[tuple[str, int], np.ndarray], n: int) -> Line
     return LinearConstraint(pivots=pivots, keep=keep, G=G, n=n)
 
 
-def assemble_model(model: Model, speed: float) -> Assembled:
-    """Assemble a :class:`Model` at input speed ``speed`` [rad/s]."""
+def assemble_model(model: ModelData, speed: float) -> Assembled:
+    """Assemble a model at input speed ``speed`` [rad/s]."""
     return SpeedTemplate(model).assemble(speed)
 
 
-def _mesh_vector(model: Model, g: dict[str, Any], plan: SpeedPlan) -> np.ndarray:
+def _mesh_vector(model: ModelData, g: dict[str, Any], plan: SpeedPlan) -> np.ndarray:
     """Line of action from normal module, pressure and helix angle and the node positions."""
     p = g["pair"]
     bp, bg = model.bodies[p.pinion_body], model.bodies[p.gear_body]

@@ -31,8 +31,8 @@ __all__ = [
 
 
 def point_amplitudes(point: OperatingPoint) -> dict[str, xr.DataArray]:
-    """Single-sided amplitudes of a solved point, from its arrays (no full Dataset: 2 ms
-    instead of 12 ms on the gearbox): radial ``response(harmonic, node)``,
+    """Single-sided amplitudes of a solved point, from its arrays (a sweep keeps only
+    these, so the point's full Dataset is not built): radial ``response(harmonic, node)``,
     ``bearing_force(bearing, harmonic)``, ``dte(mesh, harmonic)``. Coordinates ``harmonic``,
     ``node`` (with ``body``), ``bearing``, ``mesh``."""
     a, sol = point.assembled, point.solution

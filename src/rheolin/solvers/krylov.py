@@ -130,7 +130,7 @@ def _gmres_from(
     zero: a guess from a distant speed must not make GMRES start worse than from scratch.
     From ``x0`` it solves for the correction, ``A dx = rhs - A x0`` from zero, which is the
     same iteration without SciPy's second product for the same initial residual (one
-    product fewer per solve: 5 % of a continued gearbox solve)."""
+    product fewer per solve)."""
     if x0 is not None:
         r0 = rhs - apply(x0)
         start = norm(r0)

@@ -338,7 +338,7 @@ def _finish(op: HarmonicBalance, out: SolverOutcome, opts: Options, note: str = 
     info = dict(out.info)
     info["relative_residual"] = float(relative)
     info["memory_estimate"] = op.memory.total
-    store = getattr(op._inverse, "store", None)
+    store = op.factor_store
     if store is not None:
         info["sparse_backend"] = store.name
         info["refactorizations"] = store.refactorizations

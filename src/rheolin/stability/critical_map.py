@@ -228,7 +228,7 @@ def critical_speed_map(
     ``stiffness`` [N/m] in turn: isotropic across the bearing's body axis, no cross-coupling,
     no damping; their axial and rotational terms are kept. The model itself is not changed.
     """
-    from ..mechanics.preload.equilibrium import linearized
+    from ..mechanics.preload.linearize import linearized
 
     k = np.asarray(stiffness, dtype=float).ravel()
     if k.size == 0 or not np.all(np.isfinite(k)) or np.any(k <= 0):

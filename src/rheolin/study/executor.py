@@ -166,20 +166,15 @@ def local_cluster(workers: int | None = None) -> Iterator[Any]:
 
     n = workers or cores()
     spawn_env = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
-    # Dask's default MALLOC_TRIM_THRESHOLD_ (64 KiB) returns freed memory to the system at
-    # once, and any fixed threshold turns off glibc's adaptive mmap threshold: every
-    # medium-sized array of the lattice search is then mapped, faulted in and unmapped
-    # again. A gearbox verdict took 1.41 s in a worker against 0.91 s in a plain process
-    # (1.48 s with the variable set there too); the workers keep glibc's defaults
+    # any fixed MALLOC_TRIM_THRESHOLD_ (Dask sets 64 KiB) turns off glibc's adaptive mmap
+    # threshold, so every medium-sized array of the lattice search would be mapped and
+    # unmapped again: the workers keep glibc's defaults
     spawn_env.pop("MALLOC_TRIM_THRESHOLD_", None)
     settings = {
         "distributed.nanny.pre-spawn-environ": {**spawn_env, **BLAS_ENV},
-        # no dashboard, so nothing reads the workers' statistical profiler (a stack sample
-        # every 10 ms) or the system monitors, and nothing needs work stealing (a task is
-        # submitted when a worker is free) or a 20 ms event-loop tick (it only warns of a
-        # blocked loop); rheolin budgets its own memory, so the memory monitor polls once a
-        # second: an idle worker then uses 0.2 % of a core instead of 1.8 %, the client
-        # 0.5 % instead of 2.6 %
+        # without a dashboard nothing reads the profiler or the monitors, tasks are submitted
+        # when a worker is free (no stealing) and rheolin budgets its own memory: idle
+        # workers and the client poll rarely
         "distributed.worker.profile.enabled": False,
         "distributed.scheduler.work-stealing": False,
         "distributed.admin.tick.interval": "1s",

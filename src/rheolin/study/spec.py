@@ -40,10 +40,9 @@ __all__ = ["FORMAT", "Settings", "StudySpec"]
 #: blocks of 16 speeds, off-centre Floquet exponents tracked).
 FORMAT = 3
 
-#: Most consecutive speeds solved as one sequence (:attr:`StudySpec.block`). The first speed
-#: of a block is solved cold (on the gearbox a point costs 1.0 s there against 0.5 s
-#: continued); blocks of 16 save half of that start-up over a 1000-speed run-up against blocks
-#: of 8, and 16 blocks still spread over the workers of a local machine.
+#: Most consecutive speeds solved as one sequence (:attr:`StudySpec.block`): the first speed
+#: of a block is solved cold, so longer blocks start cold less often, while a 1000-speed
+#: run-up still splits into enough blocks to spread over the workers of a local machine.
 CONTINUATION_BLOCK = 16
 
 

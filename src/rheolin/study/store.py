@@ -110,8 +110,8 @@ class CheckpointStore(MemoryStore):
         self.path = self.directory / CHECKPOINT
         self._lock: Any = None
         self._done: dict[int, Path] = {}
-        # the chunks written by this run, as written (a NetCDF file reads back identical):
-        # assembling them needs no second read (2.8 s of a 1000-speed gearbox run-up)
+        # the chunks written by this run, as written (a NetCDF file reads back identical), so
+        # that assembling them needs no second read
         self._written: dict[Path, xr.Dataset] = {}
 
     # ------------------------------------------------------------------ opening

@@ -104,9 +104,7 @@ def compute_chunk(task: ChunkTask) -> ChunkResult:
 
 
 #: A point of a continuation block starts from the polynomial extrapolation of up to this
-#: many previous speeds' solutions (gmres on the gearbox at 3000 rpm: 23 iterations cold, 14
-#: from the previous solution, 10 from the linear extrapolation of two, 7 from the quadratic
-#: of three, 5 from the cubic of four).
+#: many previous speeds' solutions (each further one saved gmres iterations on the gearbox).
 EXTRAPOLATION_POINTS = 4
 
 

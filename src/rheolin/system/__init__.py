@@ -23,6 +23,15 @@
    >>> from rheolin.system import find_rigid_modes
    >>> find_rigid_modes(s).count
    1
+
+4. A system is not changed once built, so what the analyses derive from it is made once and
+   kept on it: the coefficient blocks that the solvers and the stability check share.
+
+   >>> from rheolin.harmonics.blocks import coefficient_blocks
+   >>> s.kept("coefficient_blocks") is None
+   True
+   >>> list(coefficient_blocks(s)), list(s.kept("coefficient_blocks"))
+   ([0], [0])
 """
 
 from .constraints import LinearConstraint

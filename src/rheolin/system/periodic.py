@@ -7,8 +7,8 @@ coefficient is a Fourier series ``X(t) = sum_k X_k exp(i k w1 t)`` of a real sig
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import Any
+from collections.abc import Callable, Mapping
+from typing import Any, TypeVar
 
 import numpy as np
 import scipy.sparse as sp
@@ -18,6 +18,7 @@ from ..errors import ModelError
 __all__ = ["PeriodicSystem"]
 
 Matrix = Any  # numpy.ndarray or scipy.sparse matrix/array
+T = TypeVar("T")
 
 
 def _is_sparse(x: object) -> bool:
@@ -129,6 +130,7 @@ class PeriodicSystem:
         #: spin about ``x cross y``), when known: gmres's whirl-pair preconditioner holds a
         #: rotating asymmetry exactly with them (:mod:`rheolin.solvers.krylov`)
         self.whirl_pairs: tuple[np.ndarray, np.ndarray] | None = None
+        self._derived: dict[str, Any] = {}
 
     # ------------------------------------------------------------------ validation
     @staticmethod
@@ -283,6 +285,48 @@ class PeriodicSystem:
             dense = x.toarray() if _is_sparse(x) else x
             out += (dense * np.exp(1j * k * self.omega * t)).real
         return out
+
+    # ------------------------------------------------------------------ derived data
+    def cached(self, key: str, build: Callable[[], T]) -> T:
+        """The derived data ``key`` of this system, made by ``build()`` on the first request
+        and kept on the system (its coefficients do not change once it is built).
+
+        The coefficient blocks (:func:`rheolin.harmonics.blocks.coefficient_blocks`) are kept
+        so, for the solve, the stability check and its memory estimate.
+
+        >>> s = PeriodicSystem(1.0, K={0: np.eye(2)})
+        >>> s.cached("trace", lambda: float(np.trace(s.K[0])))
+        2.0
+        >>> s.cached("trace", lambda: -1.0), s.kept("trace")
+        (2.0, 2.0)
+        """
+        if key not in self._derived:
+            self._derived[key] = build()
+        return self._derived[key]
+
+    def keep(self, key: str, value: Any) -> None:
+        """Keep ``value`` as the derived data ``key``, replacing any (``None`` forgets it).
+
+        For by-products of an analysis that a later one reuses: the harmonic-balance operator
+        keeps the time-averaged modes of its ``modal`` inverse as ``"averaged_decomposition"``,
+        and the lattice stability check starts from them (:mod:`rheolin.floquet.averaged`).
+
+        >>> s = PeriodicSystem(1.0, K={0: np.eye(2)})
+        >>> s.keep("note", "kept")
+        >>> s.kept("note")
+        'kept'
+        >>> s.keep("note", None)
+        >>> s.kept("note") is None
+        True
+        """
+        if value is None:
+            self._derived.pop(key, None)
+        else:
+            self._derived[key] = value
+
+    def kept(self, key: str) -> Any:
+        """The derived data ``key``, or ``None`` when none is kept."""
+        return self._derived.get(key)
 
     def __repr__(self) -> str:
         return (

@@ -12,10 +12,9 @@ Backends (``SPARSE_BACKENDS``), fastest first as measured (``bench/backends.py``
 * ``umfpack``: UMFPACK from SuiteSparse through ``kvxopt`` (a wheel that bundles it).
 * ``superlu``: SciPy's SuperLU (always there; holds the GIL; slow on 3-D meshes).
 
-``"auto"`` chooses by the pattern (:func:`auto_backend`): PARDISO wins where factorizing is
-costly (2-D and 3-D meshes), but each of its solves costs ~0.5-3 ms more than SuperLU's, which
-dominates on banded patterns (shaft chains, beam-like models: gmres 3-30x slower there,
-measured); those get SuperLU.
+``"auto"`` chooses by the pattern (:func:`auto_backend`): PARDISO where factorizing is costly
+(2-D and 3-D meshes); SuperLU on banded patterns (shaft chains, beam-like models), where the
+cost of each solve, which an iterative method pays per harmonic and iteration, dominates.
 """
 
 from __future__ import annotations
@@ -89,8 +88,8 @@ def available_backends() -> tuple[str, ...]:
 
 
 #: Envelope work (flops of a banded LU after reverse Cuthill-McKee) above which the
-#: factorization is costly enough for PARDISO's per-call overhead not to matter (a 1e4-DOF
-#: shaft chain: ~1e6; a 1e4-DOF plate: ~1e9; a 1e4-DOF solid: ~1e10).
+#: factorization is costly enough for PARDISO's per-call overhead not to matter (between the
+#: chains and the meshes whose envelope work bench/backends.py prints).
 CHEAP_WORK = 1e8
 
 
@@ -121,15 +120,15 @@ def envelope_work(indptr: np.ndarray, indices: np.ndarray, n: int) -> float:
 def _auto_for(n: int, digest: int, size: int, work: float) -> str:
     if work > CHEAP_WORK:
         return available_backends()[0]  # PARDISO, else UMFPACK, else SuperLU
-    return "superlu"  # cheap factors: SuperLU's solves are 2-5x faster per call (measured)
+    return "superlu"  # cheap factors: SuperLU's solves cost least per call
 
 
 def auto_backend(indptr: np.ndarray, indices: np.ndarray, n: int) -> str:
     """The backend ``"auto"`` takes for this pattern: when its envelope work exceeds
     :data:`CHEAP_WORK` the fastest factorization installed (PARDISO, UMFPACK, SuperLU, in
     that order); below, SuperLU, whose factorizations are as fast there and whose solves cost
-    2-5x less per call than UMFPACK's and PARDISO's (``bench/results/backends.md``): an
-    iterative method pays a solve per harmonic at every iteration."""
+    less per call than UMFPACK's and PARDISO's (``bench/backends.py``): an iterative method
+    pays a solve per harmonic at every iteration."""
     digest = hash((np.asarray(indptr).tobytes(), np.asarray(indices).tobytes()))
     return _auto_for(n, digest, indices.size, envelope_work(indptr, indices, n))
 

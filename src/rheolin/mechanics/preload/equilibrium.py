@@ -38,7 +38,7 @@ equilibrium in the dynamics.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -48,10 +48,15 @@ import scipy.sparse.linalg as spla
 from ...errors import ModelError
 from ...system.periodic import PeriodicSystem
 from ...system.rigid_modes import find_rigid_modes
-from ..joints import COMPONENTS
+from ..assembly import Assembled
+from ..items import ModelData, positive
+from ..rolling import MeshLoadLaw, RollingLaw
 from ..rotation import transverse_basis
+from ..template import assemble_model
+from .linearize import base_model, linearized_model
+from .state import BearingState, MeshState, OperatingPoint
 
-__all__ = ["BearingState", "MeshState", "OperatingPoint", "operating_point", "preloaded_template"]
+__all__ = ["LoadedMesh", "RollingJoint", "StaticEquilibrium", "operating_point"]
 
 #: Newton: relative residual of a converged equilibrium, iterations per load step, and the
 #: smallest load step before giving up.
@@ -59,168 +64,32 @@ RTOL = 1e-10
 MAX_ITERATIONS = 60
 MIN_STEP = 1.0 / 4096
 
-
-@dataclass
-class BearingState:
-    """A load-dependent bearing at the operating point (global axes)."""
-
-    deflection: np.ndarray  #: radial deflection of the node relative to its support [m] (3)
-    force: np.ndarray  #: force on the support [N] (3)
-    stiffness: np.ndarray  #: tangent (operating) stiffness [N/m] (3 x 3)
-    in_contact: int  #: rolling elements in contact (1/0 for lumped laws)
-    elements: int  #: rolling elements (0 for lumped laws)
-
-    @property
-    def load(self) -> float:
-        return float(np.linalg.norm(self.force))
+#: A static deflection beyond this fraction of the model's size is not a small-deflection
+#: operating point (the linear theory of every joint and body is void there).
+MAX_DEFLECTION = 1e-2
 
 
 @dataclass
-class MeshState:
-    """A load-dependent gear mesh at the operating point (line of action)."""
+class RollingJoint:
+    """A load-dependent bearing in the static problem: ``B`` (2 x n) takes the radial motion
+    of its node relative to its support into the bearing ``plane`` (3 x 2)."""
 
-    force: float  #: mean mesh force [N]
-    deflection: float  #: mean mesh deflection [m]
-    secant: float  #: k(F) [N/m]
-    stiffness: float  #: tangent (operating) stiffness dF/d delta [N/m]
-    nominal: float  #: nominal mean stiffness k0 [N/m]
+    name: str
+    law: RollingLaw
+    B: sp.csr_array
+    plane: np.ndarray
+    damping: float  #: radial damping [N s/m]
 
 
 @dataclass
-class OperatingPoint:
-    """Static equilibrium of a preloaded model and the model linearized there."""
+class LoadedMesh:
+    """A mesh with a load law in the static problem: its line of action ``w`` over every DOF
+    (``delta = w^T u``) and its nominal mean stiffness."""
 
-    speed: float
-    displacement: np.ndarray  #: static displacement of every DOF
-    dof_labels: list[tuple[str, int, str]]
-    node_index: dict[tuple[str, int], int]
-    bearings: dict[str, BearingState]
-    meshes: dict[str, MeshState]
-    torques: dict[str, float]  #: every torque [N m], reactions computed
-    rigid_load: np.ndarray  #: load left on the free rigid-body motions (R^T f), held
-    iterations: int
-    load_steps: int
-    residual: float  #: relative residual of the equilibrium
-    model: Any  #: the linearized :class:`~rheolin.mechanics.model.Model`
-    info: dict[str, Any] = field(default_factory=dict)
-
-    def node_displacement(self, body: str, node: int) -> np.ndarray:
-        """``(ux, uy, uz, phix, phiy, phiz)`` of a node at the operating point."""
-        i = self.node_index[(body, node)]
-        return self.displacement[6 * i : 6 * i + 6].copy()
-
-    def max_displacement(self) -> tuple[float, tuple[str, int]]:
-        """The largest translation [m] of any node, and where."""
-        best, where = 0.0, ("", -1)
-        for key, i in self.node_index.items():
-            v = float(np.linalg.norm(self.displacement[6 * i : 6 * i + 3]))
-            if v > best:
-                best, where = v, key
-        return best, where
-
-    def to_dict(self) -> dict[str, Any]:
-        """A JSON-able summary (SI units)."""
-        peak, (body, node) = self.max_displacement()
-        return {
-            "speed_rad_s": self.speed,
-            "max_displacement_m": peak,
-            "max_displacement_at": {"body": body, "node": node},
-            "bearings": {
-                k: {
-                    "load_N": b.load,
-                    "force_N": b.force.tolist(),
-                    "deflection_m": b.deflection.tolist(),
-                    "stiffness_N_per_m": b.stiffness.tolist(),
-                    "in_contact": b.in_contact,
-                    "elements": b.elements,
-                }
-                for k, b in self.bearings.items()
-            },
-            "meshes": {
-                k: {
-                    "force_N": m.force,
-                    "deflection_m": m.deflection,
-                    "stiffness_N_per_m": m.stiffness,
-                    "secant_N_per_m": m.secant,
-                    "nominal_N_per_m": m.nominal,
-                }
-                for k, m in self.meshes.items()
-            },
-            "torques_N_m": dict(self.torques),
-            "rigid_load": self.rigid_load.tolist(),
-            "iterations": self.iterations,
-            "load_steps": self.load_steps,
-            "residual": self.residual,
-        }
-
-    def summary(self) -> list[str]:
-        """Lines for a terminal summary."""
-        peak, (body, node) = self.max_displacement()
-        lines = [
-            f"operating point: static equilibrium in {self.iterations} Newton iterations, "
-            f"{self.load_steps} load step{'s' if self.load_steps > 1 else ''}, "
-            f"relative residual {self.residual:.1e}; largest static deflection "
-            f"{peak * 1e6:.3g} um at {body} node {node}"
-        ]
-        for k, t in self.torques.items():
-            lines.append(f"  torque {k}: {t:.6g} N m")
-        for k, b in self.bearings.items():
-            kt = np.linalg.eigvalsh(0.5 * (b.stiffness + b.stiffness.T))
-            contact = f", {b.in_contact} of {b.elements} elements in contact" if b.elements else ""
-            lines.append(
-                f"  bearing {k}: load {b.load:.6g} N, deflection "
-                f"{np.linalg.norm(b.deflection) * 1e6:.4g} um, operating stiffness "
-                f"{kt[-1]:.4g} / {kt[-2]:.4g} N/m (principal){contact}"
-            )
-        for k, m in self.meshes.items():
-            lines.append(
-                f"  mesh {k}: force {m.force:.6g} N, deflection {m.deflection * 1e6:.4g} um, "
-                f"operating stiffness {m.stiffness:.4g} N/m ({m.stiffness / m.nominal:.3g} x "
-                "nominal)"
-            )
-        if np.abs(self.rigid_load).max(initial=0.0) > 0:
-            lines.append(
-                "  load held by the constant-speed constraint (unbalanced torques): R^T f = "
-                + ", ".join(f"{x:.3g}" for x in self.rigid_load)
-            )
-        return lines
-
-
-# --------------------------------------------------------------------------- replay
-def _replay(model: Any, replace: Callable[[str, dict[str, Any]], list[tuple[str, dict]]]) -> Any:
-    from ..model import Model
-
-    out = Model(input_body=model.input_body, unbalance_reference=model.unbalance_reference)
-    for method, kwargs in model.calls:
-        for name, kw in replace(method, kwargs):
-            getattr(out, name)(**kw)
-    return out
-
-
-def _torque_force(model: Any, kw: dict[str, Any], value: float) -> tuple[str, dict[str, Any]]:
-    axis = np.asarray(model.bodies[kw["body"]].axis, dtype=float)
-    return "add_force", dict(
-        name=kw["name"], body=kw["body"], node=kw["node"], moment=list(value * axis)
-    )
-
-
-_MESH_LAW_ARGS = ("load_law", "face_width", "load_forces", "load_stiffness")
-
-
-def _base(model: Any) -> Any:
-    """The linear part: no load-dependent bearings, nominal meshes, given torques as moments."""
-
-    def replace(method: str, kw: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
-        if method == "add_rolling_bearing":
-            return []
-        if method == "add_torque":
-            t = model.torques[kw["name"]]["torque"]
-            return [] if isinstance(t, str) else [_torque_force(model, kw, t)]
-        if method == "add_gear_mesh":
-            return [(method, {k: v for k, v in kw.items() if k not in _MESH_LAW_ARGS})]
-        return [(method, kw)]
-
-    return _replay(model, replace)
+    name: str
+    law: MeshLoadLaw
+    w: np.ndarray
+    nominal: float  #: k0 [N/m]
 
 
 def _plane(axis: Any) -> np.ndarray:
@@ -229,216 +98,279 @@ def _plane(axis: Any) -> np.ndarray:
     return np.column_stack([-b, a])
 
 
-# --------------------------------------------------------------------------- the solve
-def operating_point(model: Any, speed: float) -> OperatingPoint:
+def operating_point(model: ModelData, speed: float) -> OperatingPoint:
     """Static equilibrium of ``model`` at input ``speed`` [rad/s] and its linearization (see
     the module). Raises :class:`~rheolin.errors.ModelError` naming the joint when no
     equilibrium is found."""
-    base = _base(model)
-    a = base.assemble(speed)
-    system = a.system
-    n = system.n
-    K0 = sp.csr_array(system.K[0]) if 0 in system.K else sp.csr_array((n, n))
-    f0 = np.real(np.asarray(system.f.get(0, np.zeros(n)), dtype=complex))
-    M0 = sp.csr_array(system.M[0]) if 0 in system.M else sp.csr_array((n, n))
+    return StaticEquilibrium(model, speed).solve()
 
-    def dofs(body: str, node: int) -> np.ndarray:
-        return np.asarray(a.dofs(body, node))
 
-    # bearings: B (2 x n) on the radial relative motion in the bearing plane
-    bear: list[tuple[str, Any, sp.csr_array, np.ndarray, float]] = []
-    for name, b in model.rolling.items():
-        E = _plane(model.bodies[b["body"]].axis)
-        rows = [np.repeat([0, 1], 3)]
-        cols = [np.tile(dofs(b["body"], b["node"])[:3], 2)]
-        vals = [E.T.ravel()]
-        if b["other"][0] is not None:
-            rows.append(np.repeat([0, 1], 3))
-            cols.append(np.tile(dofs(*b["other"])[:3], 2))
-            vals.append(-E.T.ravel())
-        B = sp.csr_array(
-            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(2, n)
+class StaticEquilibrium:
+    """The static problem of a preloaded model at one speed, solved by :meth:`solve` in named
+    steps: the joint operators, the reduction (rigid links, free rigid-body motions), the
+    reaction torques, load stepping, and the joint states at the equilibrium.
+
+    The linear part of the model is assembled at ``speed``: ``K0``, ``M0`` its mean stiffness
+    and mass, ``f0`` its mean load, ``a`` the assembly (DOFs, meshes).
+    """
+
+    def __init__(self, model: ModelData, speed: float) -> None:
+        self.model = model
+        base = base_model(model)
+        self.a: Assembled = assemble_model(base, positive(speed, "speed"))
+        self.speed = float(speed)
+        system = self.a.system
+        n = self.n = system.n
+        self.K0 = sp.csr_array(system.K[0]) if 0 in system.K else sp.csr_array((n, n))
+        self.f0 = np.real(np.asarray(system.f.get(0, np.zeros(n)), dtype=complex))
+        self.M0 = sp.csr_array(system.M[0]) if 0 in system.M else sp.csr_array((n, n))
+
+    def solve(self) -> OperatingPoint:
+        """The operating point: every step in turn (see the class)."""
+        self.joint_operators()
+        self.reduction()
+        self.reaction_torques()
+        y, iterations, steps = self.load_stepping()
+        u = np.asarray(self.T @ y)
+        r_end, _ = self.residual(y, 1.0, False)
+        residual = float(np.linalg.norm(self.weight * r_end)) / self.scale
+        _plausible(self.model, self.bearings, u, self.a)
+        bstates, mstates = self.joint_states(u)
+        damping = {j.name: j.damping * (j.plane @ j.plane.T) for j in self.bearings}
+        lin = linearized_model(self.model, bstates, damping, mstates, self.torques)
+        return OperatingPoint(
+            speed=self.speed,
+            displacement=u,
+            dof_labels=self.a.dof_labels,
+            node_index=self.a.node_index,
+            bearings=bstates,
+            meshes=mstates,
+            torques=self.torques,
+            rigid_load=np.asarray(self.rigid_load, dtype=float),
+            iterations=iterations,
+            load_steps=steps,
+            residual=residual,
+            model=lin,
         )
-        bear.append((name, b["law"], B, E, b["damping"]))
-    # meshes with a load law: their line-of-action vector over all DOFs
-    mesh: list[tuple[str, Any, np.ndarray, float]] = []
-    for name, g in model.meshes.items():
-        if g.get("load_law") is None:
-            continue
-        term, w, _ = a.meshes[name]
-        wv = np.zeros(n)
-        np.add.at(wv, np.asarray(term.dofs), w)
-        st = g["stiffness"]
-        k0 = float(np.real(st.get(0, 0.0))) if isinstance(st, dict) else float(st)
-        if not k0 > 0:
-            raise ModelError(f"mesh {name!r}: a load law needs a positive mean stiffness")
-        mesh.append((name, g["load_law"], wv, k0))
-    # reaction torques
-    reactions = [k for k, t in model.torques.items() if isinstance(t["torque"], str)]
-    A = np.zeros((n, len(reactions)))
-    for j, k in enumerate(reactions):
-        t = model.torques[k]
-        A[dofs(t["body"], t["node"])[3:], j] = np.asarray(model.bodies[t["body"]].axis, float)
 
-    # eliminated DOFs: rigid links, then the free rigid-body motions
-    T1 = sp.csr_array(
-        system.constraint.transform()
-        if system.constraint is not None
-        else sp.identity(n, format="csr")
-    )
-    # the bearings' reference stiffness (their tangent at 1 um): the rigid-mode search, the
-    # first guess and the regularization of singular steps
-    Kjoints = sp.csr_array((n, n))
-    for _, law, B, _, _ in bear:
-        Kjoints = Kjoints + law.reference_stiffness() * sp.csr_array(B.T @ B)
-    Kref = K0 + Kjoints
-    reduced = PeriodicSystem(
-        system.omega,
-        M={0: sp.csc_array(T1.T @ M0 @ T1)},
-        K={0: sp.csc_array(T1.T @ Kref @ T1)},
-    )
-    rigid = find_rigid_modes(reduced)
-    if rigid is not None:
-        T = sp.csr_array(T1 @ rigid.transform())
-        R = T1 @ rigid.modes  # rigid modes over every DOF
-    else:
-        T, R = T1, np.zeros((n, 0))
-    torques = {
-        k: float(t["torque"]) for k, t in model.torques.items() if not isinstance(t["torque"], str)
-    }
-    if reactions:
-        if R.shape[1] == 0:
-            raise ModelError(
-                f"torque {reactions[0]!r} = 'reaction': the model has no free rotation for it "
-                "to balance (a torsional support holds the drive train); give its value [N m]"
-            )
-        G = R.T @ A
-        x, *_ = np.linalg.lstsq(G, -(R.T @ f0), rcond=None)
-        if np.linalg.matrix_rank(G, tol=1e-9 * max(np.abs(G).max(initial=0.0), 1e-300)) < len(
-            reactions
-        ):
-            raise ModelError(
-                f"reaction torques {reactions}: they do not act on independent free rotations "
-                "of the drive train; give all but one of them a value [N m]"
-            )
-        torques.update({k: float(v) for k, v in zip(reactions, x, strict=True)})
-        f0 = f0 + A @ x
-    rigid_load = R.T @ f0 if R.size else np.zeros(0)
-    if R.size:  # round-off of balanced torques is not a load
-        floor = 1e-9 * (np.abs(R).T @ np.abs(f0))
-        rigid_load = np.where(np.abs(rigid_load) > floor, rigid_load, 0.0)
+    def _dofs(self, body: str, node: int) -> np.ndarray:
+        return np.asarray(self.a.dofs(body, node))
 
-    Tt = sp.csr_array(T.T)
-    Kr = sp.csc_array(Tt @ K0 @ T)
-    fr = Tt @ f0
-    Br = [sp.csr_array(B @ T) for _, _, B, _, _ in bear]
-    wr = [Tt @ wv for _, _, wv, _ in mesh]
-    ww = []  # w w^T of each mesh, sparse
-    for wj in wr:
-        nz = np.flatnonzero(wj)
-        ww.append(
-            sp.csc_array(
-                (np.outer(wj[nz], wj[nz]).ravel(), (np.repeat(nz, nz.size), np.tile(nz, nz.size))),
-                shape=(T.shape[1], T.shape[1]),
+    # ------------------------------------------------------------------ the steps
+    def joint_operators(self) -> None:
+        """``B`` of every load-dependent bearing (radial relative motion in its plane) and the
+        line of action of every mesh with a load law."""
+        model, n = self.model, self.n
+        self.bearings: list[RollingJoint] = []
+        for name, b in model.rolling.items():
+            E = _plane(model.bodies[b["body"]].axis)
+            rows = [np.repeat([0, 1], 3)]
+            cols = [np.tile(self._dofs(b["body"], b["node"])[:3], 2)]
+            vals = [E.T.ravel()]
+            if b["other"][0] is not None:
+                rows.append(np.repeat([0, 1], 3))
+                cols.append(np.tile(self._dofs(*b["other"])[:3], 2))
+                vals.append(-E.T.ravel())
+            B = sp.csr_array(
+                (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(2, n)
             )
+            self.bearings.append(RollingJoint(name, b["law"], B, E, b["damping"]))
+        self.meshes: list[LoadedMesh] = []
+        for name, g in model.meshes.items():
+            if g.get("load_law") is None:
+                continue
+            term, w, _ = self.a.meshes[name]
+            wv = np.zeros(n)
+            np.add.at(wv, np.asarray(term.dofs), w)
+            st = g["stiffness"]
+            k0 = float(np.real(st.get(0, 0.0))) if isinstance(st, dict) else float(st)
+            if not k0 > 0:
+                raise ModelError(f"mesh {name!r}: a load law needs a positive mean stiffness")
+            self.meshes.append(LoadedMesh(name, g["load_law"], wv, k0))
+
+    def reduction(self) -> None:
+        """``T``: the rigid links eliminated, then the free rigid-body motions ``R`` held as
+        the dynamics holds them; ``Kjoints`` the bearings' reference stiffness (their
+        tangent at 1 um), for the rigid-mode search, the first guess and the regularization
+        of singular steps."""
+        n, system = self.n, self.a.system
+        T1 = sp.csr_array(
+            system.constraint.transform()
+            if system.constraint is not None
+            else sp.identity(n, format="csr")
         )
-    Kreg = sp.csc_array(Tt @ Kjoints @ T)
-    for (_, _, _, k0), Wj in zip(mesh, ww, strict=True):
-        Kreg = Kreg + k0 * Wj
+        Kjoints = sp.csr_array((n, n))
+        for j in self.bearings:
+            Kjoints = Kjoints + j.law.reference_stiffness() * sp.csr_array(j.B.T @ j.B)
+        self.Kjoints = Kjoints
+        Kref = self.K0 + Kjoints
+        reduced = PeriodicSystem(
+            system.omega,
+            M={0: sp.csc_array(T1.T @ self.M0 @ T1)},
+            K={0: sp.csc_array(T1.T @ Kref @ T1)},
+        )
+        rigid = find_rigid_modes(reduced)
+        if rigid is not None:
+            self.T = sp.csr_array(T1 @ rigid.transform())
+            self.R = T1 @ rigid.modes  # rigid modes over every DOF
+        else:
+            self.T, self.R = T1, np.zeros((n, 0))
 
-    def evaluate(y: np.ndarray, lam: float, tangent: bool) -> tuple[np.ndarray, Any]:
-        r = Kr @ y - lam * fr
-        J = Kr.copy() if tangent else None
-        for (_, law, _, _, _), Bj in zip(bear, Br, strict=True):
-            F, Kt = law.force(Bj @ y)
+    def reaction_torques(self) -> None:
+        """Every torque's value: a ``"reaction"`` torque balances the others on the free
+        rotations; the load left on them is ``rigid_load``."""
+        model, R = self.model, self.R
+        reactions = [k for k, t in model.torques.items() if isinstance(t["torque"], str)]
+        A = np.zeros((self.n, len(reactions)))
+        for j, k in enumerate(reactions):
+            t = model.torques[k]
+            axis = np.asarray(model.bodies[t["body"]].axis, float)
+            A[self._dofs(t["body"], t["node"])[3:], j] = axis
+        self.torques = {
+            k: float(t["torque"])
+            for k, t in model.torques.items()
+            if not isinstance(t["torque"], str)
+        }
+        f0 = self.f0
+        if reactions:
+            if R.shape[1] == 0:
+                raise ModelError(
+                    f"torque {reactions[0]!r} = 'reaction': the model has no free rotation for "
+                    "it to balance (a torsional support holds the drive train); give its value "
+                    "[N m]"
+                )
+            G = R.T @ A
+            x, *_ = np.linalg.lstsq(G, -(R.T @ f0), rcond=None)
+            if np.linalg.matrix_rank(G, tol=1e-9 * max(np.abs(G).max(initial=0.0), 1e-300)) < len(
+                reactions
+            ):
+                raise ModelError(
+                    f"reaction torques {reactions}: they do not act on independent free "
+                    "rotations of the drive train; give all but one of them a value [N m]"
+                )
+            self.torques.update({k: float(v) for k, v in zip(reactions, x, strict=True)})
+            f0 = f0 + A @ x
+        self.f0 = f0
+        rigid_load = R.T @ f0 if R.size else np.zeros(0)
+        if R.size:  # round-off of balanced torques is not a load
+            floor = 1e-9 * (np.abs(R).T @ np.abs(f0))
+            rigid_load = np.where(np.abs(rigid_load) > floor, rigid_load, 0.0)
+        self.rigid_load = rigid_load
+
+    def load_stepping(self) -> tuple[np.ndarray, int, int]:
+        """The reduced equilibrium ``y`` by damped Newton over a growing load factor (halved
+        after a failed step), with the Newton iterations and load steps taken."""
+        self._reduced_operators()
+        T = self.T
+        guess = np.zeros(T.shape[1])
+        try:  # a first guess: the linear problem with the joints' reference stiffness
+            with np.errstate(all="ignore"):
+                g = spla.splu(sp.csc_array(self.Kr + self.Kreg)).solve(self.fr)
+            if np.all(np.isfinite(g)):
+                guess = g
+        except RuntimeError:
+            pass
+        y = guess
+        lam, step = 0.0, 1.0
+        iterations = steps = 0
+        last: tuple[float, float] = (0.0, np.inf)
+        while lam < 1.0:
+            target = min(1.0, lam + step)
+            start = y if lam > 0 else target * guess  # from the last equilibrium, else linear
+            ok, y_new, its, res = _newton(
+                self.residual, start, target, self.scale, self.Kreg, self.weight
+            )
+            iterations += its
+            if ok:
+                y, lam, steps = y_new, target, steps + 1
+                step = min(2 * step, 1.0)
+                continue
+            last = (target, res)
+            step /= 2
+            if step < MIN_STEP:
+                raise ModelError(_diagnose(self.model, self.bearings, T @ y_new, lam, last))
+        return y, iterations, steps
+
+    def _reduced_operators(self) -> None:
+        """The operators on the reduced unknowns ``u = T y``, the regularization ``Kreg`` and
+        the residual weights."""
+        T = self.T
+        Tt = sp.csr_array(T.T)
+        self.Kr = sp.csc_array(Tt @ self.K0 @ T)
+        self.fr = Tt @ self.f0
+        self.Br = [sp.csr_array(j.B @ T) for j in self.bearings]
+        self.wr = [Tt @ m.w for m in self.meshes]
+        self.ww: list[sp.csc_array] = []  # w w^T of each mesh, sparse
+        for wj in self.wr:
+            nz = np.flatnonzero(wj)
+            self.ww.append(
+                sp.csc_array(
+                    (
+                        np.outer(wj[nz], wj[nz]).ravel(),
+                        (np.repeat(nz, nz.size), np.tile(nz, nz.size)),
+                    ),
+                    shape=(T.shape[1], T.shape[1]),
+                )
+            )
+        Kreg = sp.csc_array(Tt @ self.Kjoints @ T)
+        for m, Wj in zip(self.meshes, self.ww, strict=True):
+            Kreg = Kreg + m.nominal * Wj
+        self.Kreg = Kreg
+        # residuals in consistent units (forces and moments): rows scaled by 1/sqrt(K_ii) of
+        # the reference stiffness (an energy-like norm for the line search and the test)
+        diag = np.abs((self.Kr + Kreg).diagonal())
+        self.weight = 1.0 / np.sqrt(np.where(diag > 0, diag, max(diag.max(initial=0.0), 1.0)))
+        self.scale = max(float(np.linalg.norm(self.weight * self.fr)), 1e-300)
+
+    def residual(self, y: np.ndarray, lam: float, tangent: bool) -> tuple[np.ndarray, Any]:
+        """``r(y)`` at load factor ``lam`` on the reduced unknowns, and its tangent when
+        asked."""
+        r = self.Kr @ y - lam * self.fr
+        J = self.Kr.copy() if tangent else None
+        for j, Bj in zip(self.bearings, self.Br, strict=True):
+            F, Kt = j.law.force(Bj @ y)
             r = r - Bj.T @ F
             if tangent:
                 J = J + sp.csc_array(Bj.T @ sp.csr_array(Kt) @ Bj)
-        for (_, law, _, k0), wj, Wj in zip(mesh, wr, ww, strict=True):
+        for m, wj, Wj in zip(self.meshes, self.wr, self.ww, strict=True):
             d = float(wj @ y)
-            F, kt = law.force(d, k0)
-            r = r + wj * (F - k0 * d)
+            Fm, kt = m.law.force(d, m.nominal)
+            r = r + wj * (Fm - m.nominal * d)
             if tangent and np.isfinite(kt):
-                J = J + (kt - k0) * Wj
+                J = J + (kt - m.nominal) * Wj
         return r, J
 
-    # residuals in consistent units (forces and moments): rows scaled by 1/sqrt(K_ii) of the
-    # reference stiffness (an energy-like norm for the line search and the convergence test)
-    diag = np.abs((Kr + Kreg).diagonal())
-    weight = 1.0 / np.sqrt(np.where(diag > 0, diag, max(diag.max(initial=0.0), 1.0)))
-    scale = max(float(np.linalg.norm(weight * fr)), 1e-300)
-    guess = np.zeros(T.shape[1])
-    try:  # a first guess: the linear problem with the joints' reference stiffness
-        with np.errstate(all="ignore"):
-            g = spla.splu(sp.csc_array(Kr + Kreg)).solve(fr)
-        if np.all(np.isfinite(g)):
-            guess = g
-    except RuntimeError:
-        pass
-    y = guess
-    lam, step = 0.0, 1.0
-    iterations = steps = 0
-    last: tuple[float, float] = (0.0, np.inf)
-    while lam < 1.0:
-        target = min(1.0, lam + step)
-        start = y if lam > 0 else target * guess  # from the last equilibrium, else linear
-        ok, y_new, its, res = _newton(evaluate, start, target, scale, Kreg, weight)
-        iterations += its
-        if ok:
-            y, lam, steps = y_new, target, steps + 1
-            step = min(2 * step, 1.0)
-            continue
-        last = (target, res)
-        step /= 2
-        if step < MIN_STEP:
-            raise ModelError(_diagnose(model, bear, T @ y_new, lam, last))
-    u = np.asarray(T @ y)
-    r_end, _ = evaluate(y, 1.0, False)
-    residual = float(np.linalg.norm(weight * r_end)) / scale
-
-    _plausible(model, bear, u, a)
-    # joint states and the linearized model
-    bstates: dict[str, BearingState] = {}
-    for name, law, B, E, _ in bear:
-        d2 = B @ u
-        F2, Kt2 = law.force(d2)
-        bstates[name] = BearingState(
-            deflection=E @ d2,
-            force=-(E @ F2),
-            stiffness=E @ Kt2 @ E.T,
-            in_contact=law.in_contact(d2),
-            elements=int(law.elements) if law.law == "elements" else 0,
-        )
-    mstates: dict[str, MeshState] = {}
-    for name, law, wv, k0 in mesh:
-        d = float(wv @ u)
-        F, kt = law.force(d, k0)
-        if F < 0:
-            raise ModelError(
-                f"mesh {name!r} is loaded on its other flank (mean force {F:.4g} N): set its "
-                "`side` to the loaded flank, or reverse the torques"
+    def joint_states(self, u: np.ndarray) -> tuple[dict[str, BearingState], dict[str, MeshState]]:
+        """Each bearing's and mesh's deflection, force and operating stiffness at ``u``."""
+        bstates: dict[str, BearingState] = {}
+        for j in self.bearings:
+            E = j.plane
+            d2 = j.B @ u
+            F2, Kt2 = j.law.force(d2)
+            bstates[j.name] = BearingState(
+                deflection=E @ d2,
+                force=-(E @ F2),
+                stiffness=E @ Kt2 @ E.T,
+                in_contact=j.law.in_contact(d2),
+                elements=int(j.law.elements) if j.law.law == "elements" else 0,
             )
-        if not (np.isfinite(kt) and kt > 0):
-            raise ModelError(
-                f"mesh {name!r} carries no load ({F:.3g} N): its load law gives no stiffness"
-            )
-        ksec = F / d if d else law.k(0.0, k0)[0]
-        mstates[name] = MeshState(force=F, deflection=d, secant=ksec, stiffness=kt, nominal=k0)
-    lin = _linearized(model, bstates, bear, mstates, torques)
-    return OperatingPoint(
-        speed=float(speed),
-        displacement=u,
-        dof_labels=a.dof_labels,
-        node_index=a.node_index,
-        bearings=bstates,
-        meshes=mstates,
-        torques=torques,
-        rigid_load=np.asarray(rigid_load, dtype=float),
-        iterations=iterations,
-        load_steps=steps,
-        residual=residual,
-        model=lin,
-    )
+        mstates: dict[str, MeshState] = {}
+        for m in self.meshes:
+            name, law, k0 = m.name, m.law, m.nominal
+            d = float(m.w @ u)
+            F, kt = law.force(d, k0)
+            if F < 0:
+                raise ModelError(
+                    f"mesh {name!r} is loaded on its other flank (mean force {F:.4g} N): set "
+                    "its `side` to the loaded flank, or reverse the torques"
+                )
+            if not (np.isfinite(kt) and kt > 0):
+                raise ModelError(
+                    f"mesh {name!r} carries no load ({F:.3g} N): its load law gives no stiffness"
+                )
+            ksec = F / d if d else law.k(0.0, k0)[0]
+            mstates[name] = MeshState(force=F, deflection=d, secant=ksec, stiffness=kt, nominal=k0)
+        return bstates, mstates
 
 
 def _newton(
@@ -490,7 +422,13 @@ def _newton(
     return nr <= tol(y), y, MAX_ITERATIONS, nr
 
 
-def _diagnose(model: Any, bear: list, u: np.ndarray, lam: float, last: tuple[float, float]) -> str:
+def _diagnose(
+    model: ModelData,
+    bearings: list[RollingJoint],
+    u: np.ndarray,
+    lam: float,
+    last: tuple[float, float],
+) -> str:
     """The message of a failed equilibrium, naming the joint most likely at fault."""
     target, res = last
     head = (
@@ -498,8 +436,9 @@ def _diagnose(model: Any, bear: list, u: np.ndarray, lam: float, last: tuple[flo
         f"(solved up to {lam:.1%}; residual {res:.3g} N)"
     )
     worst, why = None, ""
-    for name, law, B, _, _ in bear:
-        d = B @ u
+    for j in bearings:
+        name, law = j.name, j.law
+        d = j.B @ u
         r = float(np.hypot(*d))
         if law.in_contact(d) == 0:
             return (
@@ -517,18 +456,15 @@ def _diagnose(model: Any, bear: list, u: np.ndarray, lam: float, last: tuple[flo
     return head
 
 
-#: A static deflection beyond this fraction of the model's size is not a small-deflection
-#: operating point (the linear theory of every joint and body is void there).
-MAX_DEFLECTION = 1e-2
-
-
-def _plausible(model: Any, bear: list, u: np.ndarray, a: Any) -> None:
+def _plausible(model: ModelData, bearings: list[RollingJoint], u: np.ndarray, a: Assembled) -> None:
     """Refuse an equilibrium the laws cannot vouch for: a table bearing beyond its table, or
     a deflection that is not small against the model (a joint that cannot carry its load lets
     the linear rest of the model find a far-away balance)."""
-    for name, law, B, _, _ in bear:
+    for j in bearings:
+        name, law = j.name, j.law
         if law.law == "table":
-            r = float(np.hypot(*(B @ u)))
+            assert law.deflection is not None and law.force_table is not None
+            r = float(np.hypot(*(j.B @ u)))
             end = float(law.deflection[-1])
             if r > end * (1 + 1e-9):
                 raise ModelError(
@@ -544,9 +480,9 @@ def _plausible(model: Any, bear: list, u: np.ndarray, a: Any) -> None:
         if v > peak:
             peak, where = v, key
     if size > 0 and peak > MAX_DEFLECTION * size:
-        worst = max(bear, key=lambda b: float(np.hypot(*(b[2] @ u))), default=None)
+        worst = max(bearings, key=lambda j: float(np.hypot(*(j.B @ u))), default=None)
         blame = (
-            f"; bearing {worst[0]!r} deflects {float(np.hypot(*(worst[2] @ u))) * 1e3:.4g} mm"
+            f"; bearing {worst.name!r} deflects {float(np.hypot(*(worst.B @ u))) * 1e3:.4g} mm"
             if worst is not None
             else ""
         )
@@ -556,115 +492,3 @@ def _plausible(model: Any, bear: list, u: np.ndarray, a: Any) -> None:
             "joint cannot carry its load (a small-deflection operating point needs below "
             f"{MAX_DEFLECTION:.0%})"
         )
-
-
-def _linearized(
-    model: Any,
-    bstates: dict[str, BearingState],
-    bear: list,
-    mstates: dict[str, MeshState],
-    torques: dict[str, float],
-) -> Any:
-    damping = {name: c * (E @ E.T) for name, _, _, E, c in bear}
-
-    def replace(method: str, kw: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
-        if method == "add_rolling_bearing":
-            st = bstates[kw["name"]]
-            b = model.rolling[kw["name"]]
-            preload = st.force - st.stiffness @ st.deflection
-            other_body, other_node = b["other"]
-            return [
-                (
-                    "add_bearing",
-                    dict(
-                        name=kw["name"],
-                        body=b["body"],
-                        node=b["node"],
-                        stiffness=st.stiffness,
-                        damping=damping[kw["name"]],
-                        components=list(COMPONENTS[:3]),
-                        other_body=other_body,
-                        other_node=other_node,
-                        preload=preload,
-                    ),
-                )
-            ]
-        if method == "add_torque":
-            return [_torque_force(model, kw, torques[kw["name"]])]
-        if method == "add_gear_mesh":
-            kw = {k: v for k, v in kw.items() if k not in _MESH_LAW_ARGS}
-            ms = mstates.get(kw["name"])
-            if ms is None:
-                return [(method, kw)]
-            g = model.meshes[kw["name"]]
-            ratio = ms.stiffness / ms.nominal
-            te = dict(g["transmission_error"] or {})
-            te[0] = te.get(0, 0.0) + (ms.deflection - ms.force / ms.stiffness)
-            # the stiffness function scaled as it was given (a mean, a Fourier series, or the
-            # rectangular wave's two levels): the model file can still say it
-            given = kw.get("stiffness")
-            if given is not None:
-                kw["stiffness"] = (
-                    {j: v * ratio for j, v in given.items()}
-                    if isinstance(given, dict)
-                    else given * ratio
-                )
-            for key in ("single_stiffness", "double_stiffness"):
-                if kw.get(key) is not None:
-                    kw[key] = kw[key] * ratio
-            kw["transmission_error"] = te
-            return [(method, kw)]
-        return [(method, kw)]
-
-    return _replay(model, replace)
-
-
-# --------------------------------------------------------------------------- templates
-class _PerSpeedTemplate:
-    """A preloaded model whose static stiffness changes with the speed: linearized at each
-    speed (the operating point is cached per speed on the model)."""
-
-    time_invariant = False
-
-    def __init__(self, model: Any) -> None:
-        self.model = model
-        self.plan = model.speed_plan()
-
-    def assemble(self, speed: float) -> Any:
-        return self.model.assemble(speed)
-
-
-def speed_independent(model: Any) -> bool:
-    """True when the static problem of a preloaded model does not depend on the speed (no
-    speed tables, no speed-dependent mean stiffness or static load): one operating point
-    serves every speed."""
-    from ..template import SpeedTemplate
-
-    base = SpeedTemplate(_base(model))
-    K = base._K.patterns.get(0)
-    still = not base.tables and (K is None or not np.any(K[2][1:]))
-    f = base.load_polynomials().get(0)
-    return bool(still and (f is None or not np.any(f[1:])))
-
-
-def linearized(model: Any) -> Any:
-    """The model linearized at its operating point, for analyses over speed that edit or
-    inspect a model's joints (the critical-speed map); a model that is not preloaded is
-    returned as it is. Refused when the operating point changes with the speed."""
-    if not model.preloaded:
-        return model
-    if not speed_independent(model):
-        raise ModelError(
-            "this preloaded model's operating point changes with the speed (speed-dependent "
-            "stiffness or static load): use the Campbell diagram (rheolin campbell), which "
-            "linearizes at every speed"
-        )
-    return model.operating_point(1.0).model
-
-
-def preloaded_template(model: Any) -> Any:
-    """``model.speed_template()`` of a preloaded model: one linearization when its static
-    problem does not depend on the speed, else one per speed."""
-    if speed_independent(model):
-        return model.operating_point(1.0).model.speed_template()
-    return _PerSpeedTemplate(model)

@@ -9,22 +9,22 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import scipy.sparse as sp
 
-from .model import _Coefficients, _Detector, _MassInverse, _Series
+from .settings import DENSE_JAC_MAX
 
 if TYPE_CHECKING:
-    from .method import TransientSettings
+    from .model import Coefficients, Detector, Series
+    from .settings import TransientSettings
+
+__all__ = ["run_scipy", "run_sundae"]
 
 log = logging.getLogger(__name__)
 
-#: Dense Jacobian for the SciPy backend when ``2 n`` is at most this, or when it is filled.
-DENSE_JAC_MAX = 800
 
-
-def _run_scipy(c: _Coefficients, s: TransientSettings, det: _Detector) -> dict[str, Any]:
+def run_scipy(c: Coefficients, s: TransientSettings, det: Detector) -> dict[str, Any]:
     from scipy.integrate import BDF
 
     n = c.n
-    minv = _MassInverse(c.M)
+    minv = c.mass_inverse()
 
     def fun(t: float, y: np.ndarray) -> np.ndarray:
         f = c.refresh(t)
@@ -64,7 +64,7 @@ def _run_scipy(c: _Coefficients, s: TransientSettings, det: _Detector) -> dict[s
     return {"steps": steps, "nfev": solver.nfev, "njev": solver.njev, "nlu": solver.nlu}
 
 
-def _run_sundae(c: _Coefficients, s: TransientSettings, det: _Detector) -> dict[str, Any]:
+def run_sundae(c: Coefficients, s: TransientSettings, det: Detector) -> dict[str, Any]:
     from sksundae.ida import IDA
 
     n = c.n
@@ -75,7 +75,7 @@ def _run_sundae(c: _Coefficients, s: TransientSettings, det: _Detector) -> dict[
         (eye.row, eye.col),
         (eye.row, eye.col + n),
     ]
-    blocks: list[tuple[_Series, int]] = [(c.K, 0), (c.D, n), (c.M, n)]
+    blocks: list[tuple[Series, int]] = [(c.K, 0), (c.D, n), (c.M, n)]
     consts = [
         sp.coo_array((n, n)) if series.const is None else sp.coo_array(series.const)
         for series, _ in blocks
@@ -134,7 +134,7 @@ def _run_sundae(c: _Coefficients, s: TransientSettings, det: _Detector) -> dict[
             max_num_steps=100000,
         )
     f0 = c.refresh(0.0)
-    yp0 = np.concatenate([np.zeros(n), _MassInverse(c.M).solve(f0)])
+    yp0 = np.concatenate([np.zeros(n), c.mass_inverse().solve(f0)])
     init = solver.init_step(0.0, np.zeros(N), yp0)
     if not init.success:
         return {"failed": f"IDA could not start: {init.message}", "steps": 0}
@@ -161,6 +161,3 @@ def _run_sundae(c: _Coefficients, s: TransientSettings, det: _Detector) -> dict[
                 break
             ts = det.pending(t_now)
     return {"steps": steps, "nfev": int(getattr(r, "nfev", 0)) if steps else 0}
-
-
-# --------------------------------------------------------------------------- the method

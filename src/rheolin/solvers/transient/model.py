@@ -13,25 +13,18 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ...system.periodic import PeriodicSystem
+from .settings import DENSE_MAX, STALL_NOISE, STALL_RATIO, STALL_WINDOW, WOODBURY_MAX
 
 if TYPE_CHECKING:
     from ...harmonics.balance import HarmonicBalance
-    from .method import TransientSettings
+    from .settings import TransientSettings
+
+__all__ = ["Coefficients", "Detector", "MassInverse", "Series", "SingularMass"]
 
 log = logging.getLogger(__name__)
 
-#: Woodbury for ``M(t)^-1`` up to this many DOFs of time-varying mass; above, LU per call.
-WOODBURY_MAX = 256
-#: Dense mean matrices (and an explicit ``M_0^-1``) up to this many DOFs.
-DENSE_MAX = 300
-#: The change between periods has stalled when, over this many periods, it fell by less than
-#: ``STALL_RATIO`` per period (geometric mean) while below ``STALL_NOISE * rtol``.
-STALL_WINDOW = 6
-STALL_RATIO = 0.95
-STALL_NOISE = 100.0
 
-
-class _Series:
+class Series:
     """``X(t) = X_0 + dX(t)`` of one of M, D, K.
 
     ``const`` is ``X_0`` (dense for small systems, else CSR; or None). The time-varying part
@@ -96,7 +89,7 @@ class _Series:
         return var if self.const is None else sp.csr_array(self.const + var)
 
 
-class _Coefficients:
+class Coefficients:
     """``M(t)``, ``D(t)``, ``K(t)``, ``f(t)`` of a periodic system, evaluated fast."""
 
     def __init__(self, system: PeriodicSystem) -> None:
@@ -105,9 +98,9 @@ class _Coefficients:
         self.dense = n <= DENSE_MAX
         ks = sorted({k for c in (system.M, system.D, system.K, system.f) for k in c if k > 0})
         self.ks = np.array(ks, dtype=float)
-        self.M = _Series(system.M, n, self.ks, self.dense)
-        self.D = _Series(system.D, n, self.ks, self.dense)
-        self.K = _Series(system.K, n, self.ks, self.dense)
+        self.M = Series(system.M, n, self.ks, self.dense)
+        self.D = Series(system.D, n, self.ks, self.dense)
+        self.K = Series(system.K, n, self.ks, self.dense)
         self.f0 = system.f[0].astype(float) if 0 in system.f else np.zeros(n)
         self.f_table = np.zeros((2 * len(ks), n))
         for i, k in enumerate(ks):
@@ -130,13 +123,17 @@ class _Coefficients:
                 s.refresh(b)
         return self.f0 + b @ self.f_table
 
+    def mass_inverse(self) -> MassInverse:
+        """``M(t)^-1`` at the time of the last refresh (raises :class:`SingularMass`)."""
+        return MassInverse(self.M)
 
-class _MassInverse:
+
+class MassInverse:
     """``M(t)^-1 x`` from one factorization of ``M_0`` and the Woodbury identity on the
     support of ``dM`` (``M = M_0 + P_R S P_C^T``), or an LU of ``M(t)`` per call when that
     support is large."""
 
-    def __init__(self, series: _Series) -> None:
+    def __init__(self, series: Series) -> None:
         self.series = m = series
         M0 = m.const
         try:
@@ -146,7 +143,7 @@ class _MassInverse:
             else:
                 self.solve0 = spla.splu(sp.csc_array(M0)).solve
         except (RuntimeError, np.linalg.LinAlgError) as exc:
-            raise _SingularMass(str(exc)) from None
+            raise SingularMass(str(exc)) from None
         self.woodbury = m.varies and max(m.R.size, m.C.size) <= WOODBURY_MAX
         if self.woodbury:
             P = np.zeros((m.n, m.R.size))
@@ -167,19 +164,19 @@ class _MassInverse:
                     return np.linalg.solve(Mt, x)
                 return spla.splu(sp.csc_array(Mt)).solve(x)
             except (RuntimeError, np.linalg.LinAlgError) as exc:
-                raise _SingularMass(str(exc)) from None
+                raise SingularMass(str(exc)) from None
         # (M0 + P_R S P_C^T)^-1 = M0^-1 - W (I + S G)^-1 S P_C^T M0^-1
         y = self.solve0(x)
         small = np.linalg.solve(self.eye + m.sub @ self.G, m.sub @ y[m.C])
         return y - self.W @ small
 
 
-class _SingularMass(RuntimeError):
+class SingularMass(RuntimeError):
     """``M`` could not be factorized."""
 
 
 # --------------------------------------------------------------------------- detector
-class _Detector:
+class Detector:
     """Collects samples period by period and decides when the response is periodic."""
 
     def __init__(self, s: TransientSettings, n: int, callback: Callable | None) -> None:
@@ -239,6 +236,3 @@ class _Detector:
             if abs(m - round(m)) < 1e-9:
                 Q[i] = F[round(m) % self.s.samples]
         return Q
-
-
-# --------------------------------------------------------------------------- backends

@@ -1,0 +1,148 @@
+"""``rheolin campbell``: the Campbell diagram, its critical speeds and the Floquet stability
+map over the same speeds."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import typer
+from rich.markup import escape
+from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.table import Table
+
+from .common import (
+    MODEL,
+    OUT,
+    STABILITY,
+    console,
+    fail,
+    load,
+    output_dir,
+    preflight,
+    show_operating_point,
+    stability_flag,
+)
+from .errors import EXIT_FAILED, err, set_kept, sigterm_as_interrupt
+from .parse import parse_speeds
+
+__all__ = ["CAMPBELL_FILES", "campbell", "register"]
+
+#: Files ``campbell`` writes into its output directory (an earlier run's are replaced as a set).
+CAMPBELL_FILES = {"campbell.nc", "campbell.png", "stability_map.nc"}
+
+
+def campbell(
+    model: Path = MODEL,
+    speeds: str = typer.Option(
+        ..., help="start:stop:step with unit, e.g. 0:6000:100rpm (0: standstill)."
+    ),
+    out: Path = OUT,
+    fmax: float = typer.Option(None, help="Plot up to this frequency [Hz] (default: auto)."),
+    stability: str = STABILITY,
+) -> None:
+    """Campbell diagram: DIR/campbell.nc and DIR/campbell.png, critical speeds printed;
+    with the Floquet stability of the full time-periodic system at every speed (as run and
+    sweep: auto checks whenever it fits the memory budget)."""
+    from ..io.outdir import staged_output
+    from ..stability import campbell as campbell_fn
+
+    lm = load(model)
+    w = parse_speeds(speeds, allow_zero=True)  # 0: the modes at standstill
+    spinning = w[w > 0]  # what the preflight and the Floquet map look at
+    flag = stability_flag(stability)
+    if fmax is not None and not (np.isfinite(fmax) and fmax > 0):
+        raise fail(f"--fmax: must be a frequency > 0 in Hz, got {fmax}")
+    out_dir = output_dir(out, f"{model.stem}_campbell")
+    if spinning.size:
+        preflight(lm, spinning, None, None, needs_load=False)
+    from ..plots.campbell import plot_campbell
+    from ..results.dataset import write_dataset
+
+    set_kept(f"nothing written; {out_dir} is unchanged")
+    with sigterm_as_interrupt():
+        with err.status("Campbell diagram"):
+            result = campbell_fn(lm.model, w)
+        smap, why = (
+            _stability_map(lm.model, spinning, flag) if spinning.size else (None, "standstill only")
+        )
+    with sigterm_as_interrupt(), staged_output(out_dir, CAMPBELL_FILES) as stage:
+        write_dataset(result.to_dataset(), stage / "campbell.nc")
+        if smap is not None:
+            write_dataset(smap.to_dataset(), stage / "stability_map.nc")
+        plot_campbell(result, stage / "campbell.png", fmax, stability=smap)
+    set_kept(None)
+    written = [out_dir / "campbell.nc", out_dir / "campbell.png"]
+    if smap is not None:
+        written.append(out_dir / "stability_map.nc")
+    if spinning.size:
+        show_operating_point(lm.model, float(spinning[0]), "the first spinning speed")
+    table = Table(title=f"critical speeds of {escape(model.name)} (order-line crossings)")
+    for col in ("order", "mode", "kind", "speed (rpm)", "frequency (Hz)"):
+        table.add_column(col, justify="right" if "(" in col or col == "mode" else "left")
+    for c in result.critical_speeds:
+        table.add_row(
+            escape(c.order),
+            str(c.mode),
+            c.kind or c.whirl,
+            f"{c.speed * 30 / np.pi:.1f}",
+            f"{c.frequency / (2 * np.pi):.2f}",
+        )
+    console.print(table if result.critical_speeds else "no order-line crossing in the speed range")
+    code = 0
+    if smap is None:
+        console.print(f"[yellow]stability: not checked[/yellow] ({escape(why)})")
+    elif not smap.ranges:
+        undecided = int((~np.asarray(smap.decided, bool)).sum())
+        if undecided:
+            console.print(
+                "stability (Floquet, full periodic system): [yellow]no unstable speed found, "
+                f"but {undecided} of {len(smap.speeds)} speeds are UNDECIDED[/yellow] (the "
+                "truncation could still flip their verdict; docs/stability.md)"
+            )
+        else:
+            console.print(
+                "stability (Floquet, full periodic system): [green]stable at every speed[/green]"
+            )
+    else:
+        code = EXIT_FAILED
+        for r in smap.ranges:
+            console.print(
+                f"[red]unstable[/red] {r.lower * 30 / np.pi:.1f}..{r.upper * 30 / np.pi:.1f} rpm: "
+                f"{escape(r.label)}"
+            )
+    console.print("wrote " + ", ".join(str(p) for p in written), markup=False)
+    raise typer.Exit(code)
+
+
+def _stability_map(model: Any, speeds: np.ndarray, flag: bool | None) -> tuple[Any, str]:
+    """The stability map over the Campbell speeds (None and why when it is not computed)."""
+    if flag is False:
+        return None, "--stability off"
+    from ..budget import format_bytes, memory_budget
+    from ..floquet import floquet_memory
+    from ..stability import stability_map as map_fn
+    from ..study.run import MAP_PRECISION
+
+    kind, estimate = floquet_memory(model.assemble(float(speeds[-1])).system)
+    if flag is None and estimate > memory_budget():
+        return None, (
+            f"the {kind} Hill problem needs an estimated {format_bytes(estimate)}, more than "
+            f"the memory budget of {format_bytes(memory_budget())}"
+        )
+    columns = (TextColumn("{task.description}"), BarColumn(), TimeRemainingColumn())
+    with Progress(*columns, console=err) as bar:
+        task = bar.add_task("Floquet stability", total=len(speeds))
+        smap = map_fn(
+            model,
+            speeds,
+            refine=MAP_PRECISION,
+            progress=lambda i, r: bar.update(task, advance=1),
+        )
+    return smap, ""
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``campbell`` to the ``rheolin`` application."""
+    app.command("campbell")(campbell)
