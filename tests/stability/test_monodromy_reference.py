@@ -1,6 +1,6 @@
 """The Radau monodromy reference of monodromy.py against independent answers: Mathieu's band
-edges (SciPy's characteristic values) and DOP853 monodromy matrices of small systems with
-every coefficient varying.
+edges (SciPy's characteristic values), DOP853 monodromy matrices of small systems with every
+coefficient varying, and the stored gearbox-variant references (their file and its command).
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ import rheolin as rl
 
 sys.path.insert(0, str(Path(__file__).parent))
 sys.path.insert(0, str(Path(__file__).parents[1] / "core"))
+from gear_variants import BRACKETS, POINTS, reference_ranges
 from monodromy import leading_real
 from test_lattice import chain, mathieu, monodromy_max_real
 
@@ -76,3 +77,25 @@ def test_varying_mass_damping_and_stiffness_against_dop853() -> None:
     s = rl.PeriodicSystem(2.3, M=M, D=D, K=K)
     ref = leading_real(s, steps=800)
     assert ref.value == pytest.approx(monodromy_max_real(s), rel=1e-7, abs=1e-9)
+
+
+def test_stored_gear_variant_references() -> None:
+    """The stored file holds both ranges inside their brackets, with bounds known to 1e-6
+    relative, and the largest real parts at the listed speeds (unstable inside the ranges)
+    known to 1e-4 1/s (their change when the step is halved)."""
+    data = reference_ranges()
+    assert "gear_variants.py --regenerate" in data["command"]
+    for name, spec in BRACKETS.items():
+        found = data["ranges"][name]
+        for side in ("lower", "upper"):
+            a, b = sorted(spec[side])
+            assert a < found[f"{side}_rpm"] < b
+            assert found[f"{side}_uncertainty_rpm"] < 1e-6 * found[f"{side}_rpm"]
+    stored = {p["rpm"]: p for p in data["points"]}
+    assert set(stored) == set(POINTS)
+    for rpm, p in stored.items():
+        inside = any(
+            data["ranges"][r]["lower_rpm"] < rpm < data["ranges"][r]["upper_rpm"] for r in BRACKETS
+        )
+        assert (p["max_real"] > 0) == inside, rpm
+        assert p["error"] < 1e-4
