@@ -50,7 +50,6 @@ def undecided_at(monkeypatch):
     monkeypatch.setattr(solve_module, "floquet", floquet)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 30: the undecided state through files and console")
 def test_sweep_reports_undecided_speeds(undecided_at, tmp_path: Path) -> None:
     model = tmp_path / "band.toml"
     model.write_text(BAND)

@@ -13,13 +13,15 @@ import numpy as np
 
 from ..budget import MemoryBudgetError, format_bytes
 from ..budget import memory_budget as resolve_budget
-from ..harmonics.lattice import Lattice, harmonic_lattice, system_lattice
+from ..harmonics.lattice import Lattice, system_lattice
 from ..harmonics.sets import HarmonicSet, as_harmonic_set
 from ..system.periodic import PeriodicSystem
 from ..system.rigid_modes import find_rigid_modes
+from .accuracy import DEFAULT_RTOL, leading_uncertainty, next_lattice, refine_leading
 from .confirm import confirm_unresolved
 from .continuation import Continuation
 from .dense import floquet_dense
+from .resonance import floquet_lattice
 from .result import FloquetResult, floquet_result
 from .search import lattice_exponents, lattice_memory
 from .sparse import floquet_sparse
@@ -69,6 +71,7 @@ def floquet(
     memory_budget: str | int | float | None = None,
     near: Any = None,
     continuation: Continuation | None = None,
+    rtol: float | None = None,
 ) -> FloquetResult:
     """Floquet exponents by Hill's method.
 
@@ -123,6 +126,15 @@ def floquet(
         Lattice method over a sweep: a :class:`~rheolin.floquet.Continuation` shared by the
         calls at successive speeds; each lattice search starts from the previous call's
         eigenvectors (fewer Arnoldi steps; the same checks and verdict).
+    rtol
+        Lattice method: the relative accuracy of ``max_real`` (its stated uncertainty
+        ``max_real_uncertainty`` at most ``rtol |max_real|``, or ``rtol`` times a damping
+        ratio of 0.1 % of the exponent near zero; ``inf``: none): the leading exponent's
+        cluster is searched again on finer lattices, near it only, until it is met (at most
+        :data:`~rheolin.floquet.accuracy.RTOL_ORDERS` orders up, within the memory budget;
+        ``info["accuracy"]`` says what was done). Default: the ``continuation``'s, else
+        ``DEFAULT_RTOL`` (1e-4) with the automatic truncation, none with a given ``order``
+        or lattice.
 
     Examples
     --------
@@ -147,9 +159,15 @@ def floquet(
         system = system.constraint.reduce(system)
     rigid = find_rigid_modes(system)
     held = system if rigid is None else rigid.reduce(system)
+    if rtol is not None and not rtol > 0:
+        raise ValueError(f"`rtol` must be a positive number (inf: no refinement), got {rtol!r}")
+    if rtol is None and continuation is not None:
+        rtol = continuation.rtol
+    if rtol is None and order is None and harmonics is None:
+        rtol = DEFAULT_RTOL
     res = _floquet(
         held, harmonics, method, order, frequencies, k, max_shifts, memory_budget, near,
-        continuation=continuation,
+        continuation=continuation, rtol=rtol,
     )  # fmt: skip
     if rigid is not None:  # their zero exponents are a Jordan block: held, not analysed
         note = rigid.note(system)
@@ -170,6 +188,7 @@ def _floquet(
     near: Any,
     *,
     continuation: Continuation | None = None,
+    rtol: float | None = None,
 ) -> FloquetResult:
     """:func:`floquet` on a system without rigid-body modes (checked by the caller)."""
     budget = memory_budget
@@ -179,7 +198,7 @@ def _floquet(
                 f"a Lattice truncation needs method='lattice' (or 'auto'), got {method!r}"
             )
         return _floquet_lattice(
-            system, harmonics, budget=budget, near=near, continuation=continuation
+            system, harmonics, budget=budget, near=near, continuation=continuation, rtol=rtol
         )
     if near is not None and method != "lattice":
         raise ValueError("`near` needs method='lattice'")
@@ -196,6 +215,7 @@ def _floquet(
             refine=order is None and near is None,
             near=near,
             continuation=continuation,
+            rtol=rtol,
         )
     if harmonics is None:
         if system.time_invariant:
@@ -206,7 +226,12 @@ def _floquet(
                 and 2 * system.n * (2 * _dense_order(system) + 1) > AUTO_DENSE_LIMIT
             ):
                 return _lattice_auto(
-                    system, order, budget, refine=order is None, continuation=continuation
+                    system,
+                    order,
+                    budget,
+                    refine=order is None,
+                    continuation=continuation,
+                    rtol=rtol,
                 )
             hset = dense_stability_harmonics(system)
     else:
@@ -220,7 +245,7 @@ def _floquet(
         # the dense grid could not decide (a truncation that has not converged near the
         # axis): the lattice raises its order where the exponents need it
         try:
-            lat = _lattice_auto(system, None, budget, refine=True)
+            lat = _lattice_auto(system, None, budget, refine=True, rtol=rtol)
         except MemoryBudgetError:
             return res
         if lat.decided:
@@ -310,18 +335,24 @@ def _lattice_auto(
     refine: bool,
     near: Any = None,
     continuation: Continuation | None = None,
+    rtol: float | None = None,
 ) -> FloquetResult:
     """Lattice method at ``order`` (default: the coarsest, raised one order at a time up to
     :data:`MAX_AUTO_ORDER` while undecided and the larger lattice fits the budget; where it
-    does not, the undecided coarse verdict says so)."""
+    does not, the undecided coarse verdict says so). The lattices see resonances
+    (:func:`~rheolin.floquet.resonance.floquet_lattice`)."""
     limit = resolve_budget(budget)
     p = DEFAULT_LATTICE_ORDER if order is None else int(order)
-    lat = system_lattice(system, p, max_size=10**6)
-    res = _floquet_lattice(system, lat, budget=budget, near=near, continuation=continuation)
+    top = max(MAX_AUTO_ORDER, DEFAULT_LATTICE_ORDER)
+    lat = floquet_lattice(system, p, max_size=10**6)
+    res = _floquet_lattice(
+        system, lat, budget=budget, near=near, continuation=continuation, rtol=rtol,
+        last=not refine or p >= top,
+    )  # fmt: skip
     tried: list[int] = []
     seconds = float(res.info["seconds"])
-    while refine and not res.decided and p < max(MAX_AUTO_ORDER, DEFAULT_LATTICE_ORDER):
-        finer = system_lattice(system, p + 1, max_size=10**6)
+    while refine and not res.decided and p < top:
+        finer = floquet_lattice(system, p + 1, max_size=10**6)
         if lattice_memory(system, finer) > limit:
             more = f"undecided at lattice order {p}; order {p + 1} would exceed the memory budget"
             res.info["note"] = more
@@ -329,7 +360,9 @@ def _lattice_auto(
         log.info("floquet: order %d undecided; refining to order %d", p, p + 1)
         tried.append(p)
         p += 1
-        res = _floquet_lattice(system, finer, budget=budget, continuation=continuation)
+        res = _floquet_lattice(
+            system, finer, budget=budget, continuation=continuation, rtol=rtol, last=p >= top
+        )
         seconds += float(res.info["seconds"])
         res.info["refined_from"] = list(tried)
         res.info["seconds"] = seconds
@@ -343,7 +376,12 @@ def _floquet_lattice(
     budget: Any,
     near: Any = None,
     continuation: Continuation | None = None,
+    rtol: float | None = None,
+    last: bool = True,
 ) -> FloquetResult:
+    """The lattice verdict on ``lattice`` (its unresolved exponents confirmed on finer ones);
+    with ``rtol``, the leading exponent refined when the verdict is decided or ``last`` (no
+    finer order follows)."""
     t0 = time.perf_counter()
     est = lattice_memory(system, lattice)
     _check_budget(
@@ -368,7 +406,7 @@ def _floquet_lattice(
         steps: list[Any] = []
         used = est  # the largest lattice's estimate: what the verdict needed
         while near is None and np.any(out.unresolved & ~out.certified) and len(steps) < 2:
-            finer = _finer(system, finer) if finer is not None else None
+            finer = next_lattice(finer) if finer is not None else None
             if finer is None:
                 break
             est_finer = lattice_memory(system, finer)
@@ -392,8 +430,26 @@ def _floquet_lattice(
         if out.settle is not None:
             out.settle(out, np.flatnonzero(np.isnan(out.truncation)))
             out.settle = None  # it holds the lattice's operators
-    w = system.omega
-    res = floquet_result(out.exponents, out.bounds, out.edge, w, "lattice", info=out.info)
+        res = _lattice_result(system, out, lattice, near, used, t0)
+        if rtol is not None and near is None and (last or res.decided):
+            out, accuracy = refine_leading(system, out, lattice, rtol, budget, continuation)
+            res = _lattice_result(system, out, lattice, near, used, t0)
+            res.info["accuracy"] = accuracy
+    return res
+
+
+def _lattice_result(
+    system: PeriodicSystem,
+    out: Any,
+    lattice: Lattice,
+    near: Any,
+    used: int,
+    t0: float,
+) -> FloquetResult:
+    """The :class:`FloquetResult` of a lattice search ``out``."""
+    res = floquet_result(
+        out.exponents, out.bounds, out.edge, system.omega, "lattice", info=out.info
+    )
     order = np.argsort(-out.exponents.real, kind="stable")
     res.truncation = out.truncation[order]
     res.info["order"] = out.order[order]
@@ -415,18 +471,9 @@ def _floquet_lattice(
     if "confirmed" in out.info:
         res.info["confirmed"] = out.info["confirmed"]
     res.info["liouville"] = out.liouville
+    if order.size:
+        res.max_real_uncertainty = leading_uncertainty(out, int(order[0]))
     return res
-
-
-def _finer(system: PeriodicSystem, lattice: Lattice) -> Lattice | None:
-    """The lattice of the next order with the same steps (None past ``max_size``)."""
-    steps = dict(zip(lattice.generators, lattice.costs, strict=True))
-    if not steps:
-        return None
-    try:
-        return harmonic_lattice(steps, lattice.order + 1, max_size=10**6)
-    except ValueError:
-        return None
 
 
 class _single_thread_blas:

@@ -18,7 +18,6 @@ from ..harmonics.blocks import coefficient_blocks
 from ..harmonics.hill_lattice import LatticeHill
 from ..harmonics.lattice import Lattice
 from ..system.periodic import PeriodicSystem
-from .averaged import Averaged
 from .checks import liouville_sum
 from .continuation import (
     TRACK_DRIFT,
@@ -30,6 +29,7 @@ from .continuation import (
 )
 from .outcome import LatticeExponents
 from .representatives import lattice_result
+from .resonance import averaged_modes
 from .result import SAFETY
 from .select import ACCEPT_WEIGHT, CENTRED, Candidate, clusters, count, select, targets
 from .shift_invert import BalancedPencil, ShiftInvert, arnoldi, factor, harmonic_block, polish
@@ -146,7 +146,8 @@ class LatticeSearch:
         self.same_system, self.defer_truncation = same_system, defer_truncation
         # of this system: its averaged modes and Liouville sum hold here too
         same = self.same = start if same_system else coarse
-        self.avg = same.modes if same is not None and same.modes is not None else Averaged(system)
+        modes = same.modes if same is not None else None
+        self.avg = modes if modes is not None else averaged_modes(system)
         self.hill = LatticeHill(system, self.H)
         self.pencil = BalancedPencil(self.hill, self.avg.sq, self.avg.sv)
         self.centre = lattice.position(0)
