@@ -19,14 +19,14 @@ demo: $(STAMP)
 		--out demo_results/sweep
 
 lint: $(STAMP)
-	$(BIN)/ruff check src tests bench
-	$(BIN)/ruff format --check src tests bench
+	$(BIN)/ruff check src tests bench docs/figures.py docs/gallery/make.py
+	$(BIN)/ruff format --check src tests bench docs/figures.py docs/gallery/make.py
 
 typecheck: $(STAMP)
 	$(BIN)/mypy src
 
 pytest: $(STAMP)
-	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 $(BIN)/pytest
+	OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 $(BIN)/pytest -n auto
 
 test: lint typecheck pytest
 

@@ -17,6 +17,7 @@ import xarray as xr
 from rheolin.data import example_text
 from rheolin.io import atomic_write, parse_model
 from rheolin.results import complex_values, solve_point
+from rheolin.results.units import missing_units
 from rheolin.study import MAP_PRECISION
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "io"))
@@ -71,6 +72,7 @@ def test_run_results_reopen_with_xarray_and_match_the_python_api(small_run):
     assert summary["success"] == 1 and summary["stability"] == "not checked"
     assert json.loads((d / "out" / "summary.json").read_text())["residual"] == summary["residual"]
     ds = xr.open_dataset(d / "out" / "results.nc")
+    assert missing_units(ds) == []  # docs/results-schema.md, Units
     loaded = parse_model(SMALL)
     p = solve_point(loaded.model, 2000 * np.pi / 30, order=3, stability=False)
     ref = p.solution
@@ -231,6 +233,7 @@ def test_sweep_writes_results_over_speed(tmp_path):
     )
     assert res.returncode == 0, res.stderr
     ds = xr.open_dataset(tmp_path / "s" / "sweep.nc")
+    assert missing_units(ds) == []
     assert np.allclose(ds["speed_rpm"], [1000, 2000, 3000])
     assert ds["response"].dims == ("speed", "harmonic", "node")
     assert (ds["success"] == 1).all() and (ds["stable"] == -1).all()
@@ -287,11 +290,12 @@ def test_campbell_writes_the_gyroscopic_split_and_critical_speeds(tmp_path):
     )
     assert res.returncode == 0, res.stderr
     ds = xr.open_dataset(tmp_path / "c" / "campbell.nc")
+    assert missing_units(ds) == []
     assert np.allclose(ds["speed"], np.arange(400, 3001, 25))
     for W in (500.0, 3000.0):
         row = ds.sel(speed=W)
         for sign, kind in ((+1, "forward"), (-1, "backward")):
-            got = np.sort(row["frequency"].values[row["whirl"].values == kind])
+            got = 2 * np.pi * np.sort(row["frequency"].values[row["whirl"].values == kind])
             np.testing.assert_allclose(got, _whirl_frequencies(W, sign), rtol=1e-8)
     # the forward 1x critical speed: (k11 - m W^2)(k22 - (J_t - J_p) W^2) = k12^2
     (k11, k12), (_, k22) = _tip_stiffness()
@@ -299,6 +303,7 @@ def test_campbell_writes_the_gyroscopic_split_and_critical_speeds(tmp_path):
     ref = np.sqrt(x.real[(x.real > 0) & (np.abs(x.imag) < 1e-9)]).min()
     fwd = (ds["critical_order"] == "1x rotor") & (ds["critical_whirl"] == "forward")
     assert float(ds["critical_speed"][fwd].min()) == pytest.approx(ref, rel=2e-3)
+    assert ds["frequency"].attrs["units"] == "Hz" and ds["critical_speed"].attrs["units"] == "rad/s"
     assert "critical speeds" in res.stdout
     assert (tmp_path / "c" / "campbell.png").stat().st_size > 10000
 
@@ -331,6 +336,7 @@ def test_sweep_stability_map_finds_the_asymmetric_band(tmp_path):
     assert band["upper_rpm"] == pytest.approx(110 * 30 / np.pi, rel=MAP_PRECISION)
     assert band["mechanism"] == "asymmetric shaft band" and not band["open_above"]
     smap = xr.open_dataset(tmp_path / "s" / "stability_map.nc")
+    assert missing_units(smap) == []
     inside = (smap["speed"] > 100) & (smap["speed"] < 110)
     assert (smap["stable"] == ~inside).all()
     assert (tmp_path / "s" / "stability_map.png").stat().st_size > 10000

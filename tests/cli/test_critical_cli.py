@@ -13,6 +13,7 @@ import pytest
 import xarray as xr
 
 from rheolin.io import parse_model
+from rheolin.results.units import missing_units
 from rheolin.stability import campbell
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -35,6 +36,7 @@ def test_critical_map_matches_the_campbell_crossing(tmp_path: Path) -> None:
     ]
     assert crossings and first == pytest.approx(crossings[0], rel=1e-4)
     ds = xr.open_dataset(tmp_path / "out" / "critical_map.nc")
+    assert missing_units(ds) == []
     assert ds["critical_speed"].shape == (7, 4)
     assert list(ds["bearing"].values) == ["left", "right"]
     speeds = ds["critical_speed"].values[:, 0]

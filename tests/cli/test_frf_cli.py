@@ -16,6 +16,7 @@ import xarray as xr
 
 from rheolin.io import parse_model
 from rheolin.results import complex_values
+from rheolin.results.units import missing_units
 from rheolin.stability import averaged_modes
 
 ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "COLUMNS": "160"}
@@ -79,6 +80,7 @@ def test_frf_peaks_at_the_damped_natural_frequencies(tmp_path: Path) -> None:
         assert float(af_text) == pytest.approx(abs(lam[i]) / (2 * abs(lam[i].real)), rel=0.03)
     peaks = [float(f) for f, _ in rows]
     ds = xr.open_dataset(tmp_path / "out" / "frf.nc")
+    assert missing_units(ds) == [] and ds["receptance"].attrs["units"] == "m/N"
     H = complex_values(ds["receptance"]).sel(output="rotor:1:ux", input="rotor:1:ux").values
     top = float(ds["frequency"].values[int(np.argmax(np.abs(H)))])
     assert np.min(np.abs(np.array(peaks) - top)) < 2 * step  # the file holds what was printed

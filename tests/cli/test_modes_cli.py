@@ -16,6 +16,7 @@ import scipy.linalg as sla
 import xarray as xr
 
 from rheolin.io import parse_model
+from rheolin.results.units import missing_units
 
 ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "COLUMNS": "160"}
 
@@ -69,6 +70,7 @@ def test_modes_lists_labelled_modes_that_match_the_uncoupled_eigenproblems(tmp_p
     lateral = [k for k in kinds if k.startswith("lateral")]
     assert lateral[:4] == ["lateral backward", "lateral forward"] * 2
     ds = xr.open_dataset(tmp_path / "out" / "modes.nc")
+    assert missing_units(ds) == []
     assert ds["shape"].shape == (16, len(a.dof_labels), 2)
     np.testing.assert_allclose(ds["energy_share"].sum("motion").values, 1.0, rtol=1e-12)
     assert (tmp_path / "out" / "modes.png").stat().st_size > 20_000

@@ -22,7 +22,19 @@ from pathlib import Path
 import typer
 
 from .. import __version__
-from . import campbell, condense, critical, files, frf, modes, point, ross, sweep
+from . import (
+    campbell,
+    condense,
+    critical,
+    draw,
+    files,
+    frf,
+    html_report,
+    modes,
+    point,
+    ross,
+    sweep,
+)
 from .common import console
 from .errors import ContractGroup, set_debug
 
@@ -105,6 +117,8 @@ condense.register(app)
 frf.register(app)
 critical.register(app)
 modes.register(app)
+draw.register(app)
+html_report.register(app)
 
 
 def main() -> None:

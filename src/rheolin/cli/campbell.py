@@ -9,9 +9,9 @@ from typing import Any
 import numpy as np
 import typer
 from rich.markup import escape
-from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
+from .. import __version__
 from .common import (
     FLOQUET_RTOL,
     MODEL,
@@ -26,13 +26,14 @@ from .common import (
     show_operating_point,
     stability_flag,
 )
-from .errors import EXIT_FAILED, err, set_kept, sigterm_as_interrupt
+from .errors import EXIT_FAILED, set_kept, sigterm_as_interrupt
 from .parse import parse_speeds
+from .progress import counted
 
 __all__ = ["CAMPBELL_FILES", "campbell", "register"]
 
 #: Files ``campbell`` writes into its output directory (an earlier run's are replaced as a set).
-CAMPBELL_FILES = {"campbell.nc", "campbell.png", "stability_map.nc"}
+CAMPBELL_FILES = {"campbell.nc", "campbell.png", "stability_map.nc", "report.html"}
 
 
 def campbell(
@@ -44,6 +45,7 @@ def campbell(
     fmax: float = typer.Option(None, help="Plot up to this frequency [Hz] (default: auto)."),
     stability: str = STABILITY,
     floquet_accuracy: float = FLOQUET_RTOL,
+    report: bool = typer.Option(False, "--report", help="Also write DIR/report.html."),
 ) -> None:
     """Campbell diagram: DIR/campbell.nc and DIR/campbell.png, critical speeds printed;
     with the Floquet stability of the full time-periodic system at every speed (as run and
@@ -66,20 +68,28 @@ def campbell(
 
     set_kept(f"nothing written; {out_dir} is unchanged")
     with sigterm_as_interrupt():
-        with err.status("Campbell diagram"):
-            result = campbell_fn(lm.model, w)
+        with counted("Campbell diagram", w.size, "speeds") as step:
+            result = campbell_fn(lm.model, w, progress=step)
         smap, why = (
             _stability_map(lm.model, spinning, flag, accuracy)
             if spinning.size
             else (None, "standstill only")
         )
     with sigterm_as_interrupt(), staged_output(out_dir, CAMPBELL_FILES) as stage:
-        write_dataset(result.to_dataset(), stage / "campbell.nc")
+        ds = result.to_dataset()
+        ds.attrs.update(model_file=str(model), model_sha256=lm.sha256, rheolin_version=__version__)
+        write_dataset(ds, stage / "campbell.nc")
         if smap is not None:
             write_dataset(smap.to_dataset(), stage / "stability_map.nc")
         plot_campbell(result, stage / "campbell.png", fmax, stability=smap)
+        if report:
+            from ..report import write_report
+
+            write_report(stage, model=model, where=str(out_dir))
     set_kept(None)
     written = [out_dir / "campbell.nc", out_dir / "campbell.png"]
+    if report:
+        written.append(out_dir / "report.html")
     if smap is not None:
         written.append(out_dir / "stability_map.nc")
     if spinning.size:
@@ -146,14 +156,12 @@ def _stability_map(
             f"the {kind} Hill problem needs an estimated {format_bytes(estimate)}, more than "
             f"the memory budget of {format_bytes(memory_budget())}"
         )
-    columns = (TextColumn("{task.description}"), BarColumn(), TimeRemainingColumn())
-    with Progress(*columns, console=err) as bar:
-        task = bar.add_task("Floquet stability", total=len(speeds))
+    with counted("Floquet stability", len(speeds), "speeds") as step:
         smap = map_fn(
             model,
             speeds,
             refine=MAP_PRECISION,
-            progress=lambda i, r: bar.update(task, advance=1),
+            progress=lambda i, r: step(i + 1),
             rtol=accuracy,
         )
     return smap, ""

@@ -11,7 +11,8 @@ from rich.markup import escape
 from rich.table import Table
 
 from .common import MODEL, OUT, console, fail, load, output_dir
-from .errors import err, set_kept, sigterm_as_interrupt
+from .errors import set_kept, sigterm_as_interrupt
+from .progress import working
 
 __all__ = ["critical_map", "register"]
 
@@ -67,7 +68,7 @@ def critical_map(
         raise fail(f"--count: must be >= 1, got {count}")
     out_dir = output_dir(out, f"{model.stem}_critical_map")
     set_kept(f"nothing written; {out_dir} is unchanged")
-    with sigterm_as_interrupt(), err.status(f"critical speeds at {k.size} stiffness values"):
+    with sigterm_as_interrupt(), working(f"critical speeds at {k.size} stiffness values"):
         try:
             result = critical_speed_map(lm.model, k, bearings=bearings or None, n_modes=count)
         except ModelError as exc:

@@ -12,6 +12,7 @@ from rich.markup import escape
 from .. import __version__
 from ..errors import ModelError
 from .common import MODEL, console, fail, load, output_dir, preflight
+from .progress import working
 
 __all__ = ["example", "register", "validate", "version"]
 
@@ -70,7 +71,8 @@ def example(
         from ..fe.gearbox_housing import build
 
         directory = output_dir(out, str(out))
-        path = build(directory)
+        with working("gearbox-housing: meshing the housing, its FE matrices, condensing them"):
+            path = build(directory)
         console.print(
             f"wrote {escape(str(path))} and {escape(str(directory / 'housing.npz'))}; "
             f"run: rheolin run {escape(str(path))}",

@@ -10,8 +10,9 @@ from rich.markup import escape
 from rich.table import Table
 
 from .common import MODEL, OUT, console, fail, load, output_dir, stability_flag
-from .errors import EXIT_FAILED, err, set_kept, sigterm_as_interrupt
+from .errors import EXIT_FAILED, set_kept, sigterm_as_interrupt
 from .parse import parse_speed, parse_speeds
+from .progress import counted, working
 
 __all__ = ["frf", "register"]
 
@@ -78,9 +79,16 @@ def frf(
     out_dir = output_dir(out, f"{model.stem}_frf")
     set_kept(f"nothing written; {out_dir} is unchanged")
     with sigterm_as_interrupt():
-        with err.status(f"frequency response over {w.size} frequencies"):
+        with counted("frequency response", w.size, "frequencies") as step:
             res = frequency_response(
-                lm.model, w_speed, w, inputs, outputs or None, order=order, unbalance=unbalance
+                lm.model,
+                w_speed,
+                w,
+                inputs,
+                outputs or None,
+                order=order,
+                unbalance=unbalance,
+                progress=step,
             )
         verdict, why = None, ""
         if flag is not False:
@@ -91,12 +99,13 @@ def frf(
                     f"than the memory budget of {format_bytes(memory_budget())}"
                 )
             else:
-                with err.status("Floquet stability"):
+                with working("Floquet stability"):
                     verdict = floquet(assembled.system)
         else:
             why = "--stability off"
     with sigterm_as_interrupt(), staged_output(out_dir, FRF_FILES) as stage:
         ds = res.to_dataset()
+        ds.attrs.update(model_file=str(model), model_sha256=lm.sha256)
         if verdict is not None:
             ds.attrs["stable"] = int(verdict.stable)
             ds.attrs["max_floquet_real"] = float(verdict.max_real)

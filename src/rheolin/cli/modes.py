@@ -10,15 +10,16 @@ from rich.markup import escape
 from rich.table import Table
 
 from .common import MODEL, OUT, console, fail, load, output_dir
-from .errors import err, set_kept, sigterm_as_interrupt
+from .errors import set_kept, sigterm_as_interrupt
 from .parse import parse_speeds
+from .progress import working
 
 __all__ = ["modes", "register"]
 
 MODES_FILES = {"modes.nc", "modes.png"}
 
 SPEED = typer.Option(..., help="Input speed, e.g. 3000rpm (0: standstill).")
-COUNT = typer.Option(12, help="How many of the lowest modes to list (the first six are drawn).")
+COUNT = typer.Option(12, help="How many of the lowest modes to list and draw (at most 16 drawn).")
 
 
 def modes(
@@ -32,6 +33,7 @@ def modes(
     from ..io.outdir import staged_output
     from ..plots.modes import plot_mode_shapes
     from ..results.dataset import write_dataset
+    from ..results.units import speed_attrs
     from ..stability.campbell import STANDSTILL
     from ..stability.modes import averaged_modes, mode_energy, mode_kind, whirl_ratio
 
@@ -43,7 +45,7 @@ def modes(
     out_dir = output_dir(out, f"{model.stem}_modes")
     set_kept(f"nothing written; {out_dir} is unchanged")
     m = lm.model
-    with sigterm_as_interrupt(), err.status("modes"):
+    with sigterm_as_interrupt(), working(f"modes at {float(w) * 30 / np.pi:.6g} rpm"):
         a = m.assemble(W)
         am = averaged_modes(a.system, count)
         axes = {b: m.bodies[b].axis for b in m.bodies}
@@ -58,24 +60,33 @@ def modes(
                 am.frequency / (2 * np.pi),
                 {"units": "Hz", "long_name": "damped natural frequency"},
             ),
-            "damping_ratio": ("mode", am.damping_ratio),
-            "log_decrement": ("mode", am.log_decrement),
-            "whirl_ratio": ("mode", ratio),
+            "damping_ratio": ("mode", am.damping_ratio, {"units": "1"}),
+            "log_decrement": ("mode", am.log_decrement, {"units": "1"}),
+            "whirl_ratio": ("mode", ratio, {"units": "1"}),
             "kind": ("mode", np.asarray(kinds, dtype=str)),
-            "energy_share": (("mode", "motion"), energy),
-            "shape": (("mode", "dof", "part"), np.stack([am.shapes.T.real, am.shapes.T.imag], -1)),
+            "energy_share": (("mode", "motion"), energy, {"units": "1"}),
+            "shape": (
+                ("mode", "dof", "part"),
+                np.stack([am.shapes.T.real, am.shapes.T.imag], -1),
+                {"units": "1", "long_name": "mode shape, unit 2-norm (m and rad per DOF)"},
+            ),
         },
         coords={
-            "mode": np.arange(am.frequency.size),
+            "mode": ("mode", np.arange(am.frequency.size), {"units": "1"}),
             "dof": labels,
             "motion": ["lateral", "torsional", "axial", "other"],
             "part": ["real", "imag"],
         },
-        attrs={"speed_rad_s": float(w), "rigid_body_modes": int(am.rigid_eigenvalues)},
+        attrs={
+            **speed_attrs(float(w)),
+            "rigid_body_modes": int(am.rigid_eigenvalues),
+            "model_file": str(model),
+            "model_sha256": lm.sha256,
+        },
     )
     with sigterm_as_interrupt(), staged_output(out_dir, MODES_FILES) as stage:
         write_dataset(ds, stage / "modes.nc")
-        plot_mode_shapes(m, W, stage / "modes.png")
+        plot_mode_shapes(m, W, stage / "modes.png", n_modes=count)
     set_kept(None)
     table = Table(title=f"modes of {escape(model.name)} at {float(w) * 30 / np.pi:.0f} rpm")
     for col in ("mode", "frequency (Hz)", "damping ratio", "kind"):

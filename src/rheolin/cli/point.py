@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -29,6 +30,7 @@ from .common import (
 )
 from .errors import EXIT_FAILED, err, set_kept, sigterm_as_interrupt
 from .parse import parse_speed
+from .progress import working
 from .report import print_summary
 
 __all__ = ["RUN_FILES", "register", "run"]
@@ -41,6 +43,7 @@ RUN_FILES = {
     "spectrum.png",
     "convergence.png",
     "bearing_forces.png",
+    "report.html",
 }
 
 
@@ -57,6 +60,7 @@ def run(
     nodes: str = typer.Option(None, help="Orbit/spectrum nodes, e.g. input:3,output:6."),
     plots: bool = typer.Option(True, help="Write PNG plots."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
+    report: bool = typer.Option(False, "--report", help="Also write DIR/report.html."),
 ) -> None:
     """Solve one operating point; write DIR/results.nc, DIR/summary.json and plots."""
     from ..io.outdir import staged_output
@@ -85,7 +89,8 @@ def run(
     preflight(lm, [w], opts["order"], opts["max_order"])
     set_kept(f"nothing written; {out_dir} is unchanged")
     t0 = time.perf_counter()
-    with Notes() as notes, sigterm_as_interrupt():
+    rpm = w * 30 / math.pi
+    with Notes() as notes, sigterm_as_interrupt(), working(f"solving at {rpm:.6g} rpm"):
         point = solve_point(lm.model, w, **opts)
     seconds = time.perf_counter() - t0  # assembly, solve and stability check
     ds = point_dataset(point, model_sha256=lm.sha256, model_name=lm.spec.model.name)
@@ -103,6 +108,10 @@ def run(
             from ..plots import point_plots
 
             written += point_plots(ds, stage, node_list)
+        if report:
+            from ..report import write_report
+
+            written.append(write_report(stage, model=model, where=str(out_dir)))
     written = [out_dir / p.name for p in written]
     set_kept(None)
     if as_json:

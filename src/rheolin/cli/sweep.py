@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import time
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
@@ -48,6 +49,7 @@ from .errors import (
     sigterm_as_interrupt,
 )
 from .parse import parse_speeds
+from .progress import INTERVAL, LogLines
 
 __all__ = ["StudyBar", "map_counts", "print_study_summary", "register", "run_sweep", "sweep"]
 
@@ -92,6 +94,13 @@ def sweep(
         "response",
         help="Output of the parameter plots: response, bearing_force, dte, max_floquet_real.",
     ),
+    refine_peaks: bool = typer.Option(
+        False,
+        "--refine-peaks",
+        help="Add speeds around resonance peaks with fewer than 5 speeds in their half-power "
+        "band, and run again (up to twice), so that their amplification factors are resolved.",
+    ),
+    report: bool = typer.Option(False, "--report", help="Also write DIR/report.html."),
 ) -> None:
     """Solve over speeds (and parameter values, --vary) in parallel on Dask, checkpointed:
     a re-run of the same command computes only the missing points. Writes DIR/sweep.nc,
@@ -107,6 +116,8 @@ def sweep(
         raise fail(f"--chunk-size: must be >= 1, got {chunk_size}")
     if quantity not in QUANTITIES:
         raise fail(f"--quantity: must be one of {sorted(QUANTITIES)}, got {quantity!r}")
+    if refine_peaks and vary:
+        raise fail("--refine-peaks: for a speed sweep only (resonances are not sought with --vary)")
     out_dir = output_dir(out, f"{model.stem}_sweep")
     preflight(lm, w, opts["order"], opts["max_order"])
     settings = {
@@ -119,6 +130,25 @@ def sweep(
     show_operating_point(lm.model, float(w[0]), "the first speed, the file's parameters")
     run = dict(out=out_dir, overwrite=overwrite, workers=workers, chunk_size=chunk_size)
     code = run_sweep(console, err, model, w, vary, settings, scheduler, run, plots, quantity)
+    for attempt in range(2 if refine_peaks else 0):
+        from .peaks import refined_speeds
+
+        more = refined_speeds(out_dir, w) if code in (0, EXIT_FAILED) else None
+        if more is None:
+            break
+        console.print(
+            f"refining resonance peaks (pass {attempt + 1}): {more.size - w.size} speeds added",
+            highlight=False,
+        )
+        w = more
+        run = {**run, "overwrite": True}  # this sweep's own checkpoint, with other speeds
+        code = run_sweep(console, err, model, w, vary, settings, scheduler, run, plots, quantity)
+    if report and code in (0, EXIT_FAILED):
+        from .html_report import write_report_for
+
+        write_report_for(out_dir, model)
+    elif (out_dir / "report.html").is_file():  # an earlier run's: it describes other results
+        (out_dir / "report.html").unlink()
     raise typer.Exit(code)
 
 
@@ -211,6 +241,7 @@ class StudyBar:
         )
         self.task: Any = None
         self.announced = False
+        self.lines: LogLines | None = None
 
     def __enter__(self) -> StudyBar:
         self.progress.__enter__()
@@ -237,6 +268,10 @@ class StudyBar:
         self.progress.update(
             self.task, completed=event.done, total=event.total, description=what + failed
         )
+        if not self.console.is_terminal:  # a log: rich draws no bar there
+            if self.lines is None or self.lines.what != what:
+                self.lines = LogLines(self.console, what, event.total, "", INTERVAL, time.monotonic)
+            self.lines.update(event.done)
 
     def where(self, point: int) -> str:
         return self.where_point(self.spec, point)
@@ -359,6 +394,11 @@ def print_study_summary(console: Console, err: Console, result: Any) -> None:
             highlight=False,
             soft_wrap=True,
         )
+    from .peaks import coarse_note
+
+    coarse = coarse_note([p for p in resonances(result) if not p["resolved"]])
+    if coarse:
+        err.print(f"warning: {coarse}", markup=False, highlight=False, soft_wrap=True)
     for w in result.warnings:
         err.print(f"warning: {w}", markup=False, highlight=False, soft_wrap=True)
     if result.written:

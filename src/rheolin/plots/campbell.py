@@ -6,15 +6,20 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from matplotlib.cm import ScalarMappable
+from matplotlib.colors import LinearSegmentedColormap, Normalize
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 from ._common import new_figure, save
 
-__all__ = ["plot_campbell", "plot_critical_map"]
+__all__ = ["campbell_figure", "critical_map_figure", "plot_campbell", "plot_critical_map"]
 
 RPM = 60.0 / (2.0 * np.pi)  # rad/s -> rpm
 HZ = 1.0 / (2.0 * np.pi)  # rad/s -> Hz
-_COLORS = {"forward": "tab:blue", "backward": "tab:red", "mixed": "tab:purple", "none": "0.45"}
-#: Markers by the mode's kind (its first word), and their legend label ("" : by whirl).
+#: Whirl ratio -1 (backward) red, 0 (planar, none) white, +1 (forward) blue.
+WHIRL_MAP = LinearSegmentedColormap.from_list("whirl", ["#d62728", "#f7f7f7", "#1f77b4"])
+#: Markers by the mode's kind (its first word), and their legend label ("": lateral).
 _MARKERS = {
     "": ("o", ""),
     "torsional": ("s", "torsional"),
@@ -23,17 +28,148 @@ _MARKERS = {
 }
 
 
+def _order_styles(names: list[str]) -> dict[str, tuple[str, str]]:
+    """Colour and dash of each order line: mesh orders in reds, each shaft's 1x (dashed) and
+    2x (dotted) in one shade of grey."""
+    shades = ("0.1", "0.4", "0.6", "0.25", "0.5")
+    reds = ("tab:red", "darkred", "salmon", "firebrick")
+    bodies = list(dict.fromkeys(n.split(" ", 1)[1] for n in names if not n.startswith("mesh")))
+    out, meshes = {}, 0
+    for n in names:
+        if n.startswith("mesh"):
+            out[n] = (reds[meshes % len(reds)], "-." if meshes % 2 else "--")
+            meshes += 1
+        else:
+            shade = shades[bodies.index(n.split(" ", 1)[1]) % len(shades)]
+            out[n] = (shade, ":" if n.startswith("2x") else "--")
+    return out
+
+
+def campbell_figure(result: Any, fmax_hz: float | None = None, stability: Any = None) -> Figure:
+    """The Campbell diagram (see :func:`plot_campbell`) as a Figure."""
+    fig, axes = new_figure(2, 1, (10, 9))
+    ax, axd = axes[0, 0], axes[1, 0]
+    rpm = np.asarray(result.speeds) * RPM
+    freq = np.asarray(result.frequency) * HZ
+    ratio = np.nan_to_num(np.asarray(result.whirl_ratio, dtype=float))
+    kinds = np.asarray(result.kind if result.kind is not None else np.full(freq.shape, ""), str)
+    first = np.char.partition(kinds, " ")[..., 0]
+    fmax = _default_fmax(freq, result) if fmax_hz is None else float(fmax_hz)
+    below = np.nanmin(np.where(np.isfinite(freq), freq, np.inf), axis=0) <= fmax
+    zeta = np.asarray(result.damping_ratio)
+    speeds = np.broadcast_to(rpm[:, None], freq.shape)
+    norm = Normalize(-1.0, 1.0)
+    shapes = []
+    for shape, (marker, name) in _MARKERS.items():
+        mask = np.isfinite(freq) & below[None, :]
+        mask &= (first == shape) if shape else ~np.isin(first, [k for k in _MARKERS if k])
+        if not mask.any():
+            continue
+        for a, y in ((ax, freq), (axd, zeta)):
+            a.scatter(
+                speeds[mask],
+                y[mask],
+                c=ratio[mask],
+                cmap=WHIRL_MAP,
+                norm=norm,
+                marker=marker,
+                s=16,
+                lw=0.3,
+                edgecolors="0.2",
+                zorder=3,
+            )
+        shapes.append(
+            Line2D([], [], marker=marker, ls="", mfc="white", mec="k", label=name or "lateral")
+        )
+    for j in np.flatnonzero(below):
+        ax.plot(rpm, freq[:, j], "-", lw=0.6, color="0.75", zorder=1)
+        axd.plot(rpm, zeta[:, j], "-", lw=0.6, color="0.75", zorder=1)
+    lines = []
+    styles = _order_styles(list(result.orders))
+    for name, r in result.orders.items():
+        color, dash = styles[name]
+        lines += ax.plot(
+            rpm, r * np.asarray(result.speeds) * HZ, dash, lw=1.0, color=color, label=name, zorder=2
+        )
+    for c in result.critical_speeds:
+        if c.frequency * HZ <= fmax:
+            face = "none" if c.whirl != "forward" else "gold"
+            ax.plot(
+                c.speed * RPM,
+                c.frequency * HZ,
+                "o",
+                ms=10,
+                mfc=face,
+                mec="k",
+                mew=1.0,
+                alpha=0.8,
+                zorder=4,
+            )
+    shapes.append(
+        Line2D(
+            [], [], marker="o", ls="", ms=9, mfc="gold", mec="k", label="critical speed (forward)"
+        )
+    )
+    shapes.append(
+        Line2D([], [], marker="o", ls="", ms=9, mfc="none", mec="k", label="critical speed (other)")
+    )
+    ax.set_ylim(0.0, fmax)
+    for a in (ax, axd):
+        a.set_xlim(rpm[0], rpm[-1])
+        a.set_xlabel("input speed [rpm]")
+        a.grid(alpha=0.3)
+    if stability is not None:
+        for r in stability.ranges:
+            for a in (ax, axd):
+                a.axvspan(r.lower * RPM, r.upper * RPM, color="tab:red", alpha=0.12, lw=0)
+    ax.set_ylabel("damped natural frequency [Hz]")
+    title = "Campbell diagram (time-averaged system)"
+    if stability is not None:
+        title += "; " + (
+            f"Floquet: {len(stability.ranges)} unstable range(s), shaded"
+            if stability.ranges
+            else "Floquet: stable at every speed"
+        )
+    ax.set_title(title, fontsize=10)
+    fig.legend(
+        handles=shapes, fontsize=7, loc="outside right upper", title="mode kind", title_fontsize=7
+    )
+    fig.legend(
+        handles=lines, fontsize=7, loc="outside right lower", title="order lines", title_fontsize=7
+    )
+    fig.colorbar(
+        ScalarMappable(norm=norm, cmap=WHIRL_MAP),
+        ax=[ax, axd],
+        location="bottom",
+        shrink=0.5,
+        label="whirl ratio: +1 forward, -1 backward, 0 planar or none",
+    )
+    finite = zeta[:, below][np.isfinite(zeta[:, below])]
+    if finite.size == 0 or np.abs(finite).max() < 1e-9:  # undamped: rounding noise only
+        axd.set_ylim(-0.01, 0.01)
+        axd.set_title("damping ratio: undamped (|damping ratio| < 1e-9)", fontsize=10)
+    else:
+        axd.set_title(
+            f"damping ratio of the {int(below.sum())} branches below {fmax:.0f} Hz "
+            "(negative: a growing mode)",
+            fontsize=10,
+        )
+    axd.axhline(0.0, color="tab:red", lw=1.0)
+    axd.set_ylabel("damping ratio [-]")
+    return fig
+
+
 def plot_campbell(
     result: Any, path: str | Path, fmax_hz: float | None = None, stability: Any = None
 ) -> Path:
     """Campbell diagram as a PNG.
 
     Top: damped natural frequencies [Hz] against input speed [rpm], one marker per mode and
-    speed, coloured by whirl (forward blue, backward red, mixed purple, no whirl grey), shaped
-    by kind (circles lateral, squares torsional, triangles axial, diamonds coupled); order
-    lines dashed (mesh orders red) and critical speeds circled (filled for forward whirl).
-    Bottom: damping ratio of every branch (a negative value is a growing mode of the
-    averaged system).
+    speed, coloured by the whirl ratio (+1 forward blue, -1 backward red, 0 planar or no
+    whirl white) and shaped by kind (circles lateral, squares torsional, triangles axial,
+    diamonds coupled); order lines in their own legend, critical speeds circled (filled for
+    forward whirl). Bottom: damping ratio of the same branches (a negative value is a
+    growing mode of the averaged system).
 
     Parameters
     ----------
@@ -48,7 +184,7 @@ def plot_campbell(
         The damping panel shows the branches below this limit.
     stability
         A :class:`~rheolin.stability.StabilityMap` over the same speeds: its unstable ranges
-        (of the full time-periodic system, Floquet) are shaded in both panels and labelled.
+        (of the full time-periodic system, Floquet) are shaded in both panels.
 
     Examples
     --------
@@ -61,100 +197,7 @@ def plot_campbell(
     >>> p.stat().st_size > 1000
     True
     """
-    fig, axes = new_figure(2, 1, (9, 8.5))
-    ax, axd = axes[0, 0], axes[1, 0]
-    rpm = np.asarray(result.speeds) * RPM
-    freq = np.asarray(result.frequency) * HZ
-    labels = np.asarray(result.whirl)
-    kinds = np.asarray(result.kind if result.kind is not None else np.full(freq.shape, ""), str)
-    shown = set()
-    for kind, color in _COLORS.items():
-        for shape, (marker, name) in _MARKERS.items():
-            mask = (labels == kind) & np.char.startswith(kinds, shape)
-            if shape == "":
-                mask = (labels == kind) & ~np.isin(
-                    np.char.partition(kinds, " ")[..., 0], [k for k in _MARKERS if k]
-                )
-            if not mask.any():
-                continue
-            speeds = np.broadcast_to(rpm[:, None], freq.shape)[mask]
-            label = name or ("no whirl" if kind == "none" else f"{kind} whirl")
-            ax.plot(speeds, freq[mask], marker, ms=3.5, color=color, ls="none",
-                    label=None if label in shown else label)  # fmt: skip
-            shown.add(label)
-    for j in range(freq.shape[1]):
-        ax.plot(rpm, freq[:, j], "-", lw=0.6, color="0.7", zorder=0)
-    fmax = _default_fmax(freq, result) if fmax_hz is None else float(fmax_hz)
-    for name, ratio in result.orders.items():
-        line = ratio * np.asarray(result.speeds) * HZ
-        color = "tab:red" if name.startswith("mesh") else "k"
-        ax.plot(rpm, line, "--", lw=0.9, color=color, alpha=0.6)
-        inside = np.nonzero(line <= fmax)[0]
-        if inside.size:
-            i = inside[-1]
-            ax.annotate(
-                name,
-                (rpm[i], line[i]),
-                fontsize=7,
-                color=color,
-                xytext=(2, 2),
-                textcoords="offset points",
-            )
-    for c in result.critical_speeds:
-        face = _COLORS.get(c.whirl, "0.45") if c.whirl == "forward" else "none"
-        ax.plot(c.speed * RPM, c.frequency * HZ, "o", ms=9, mfc=face, mec="k", mew=1.0, alpha=0.8)
-    ax.set_ylim(0.0, fmax)
-    ax.set_xlim(rpm[0], rpm[-1])
-    if stability is not None:
-        for r in stability.ranges:
-            for a in (ax, axd):
-                a.axvspan(r.lower * RPM, r.upper * RPM, color="tab:red", alpha=0.12, lw=0)
-            ax.annotate(
-                f"unstable (Floquet): {r.label}"[:90],
-                (0.5 * (r.lower + r.upper) * RPM, 0.97 * fmax),
-                ha="center",
-                va="top",
-                fontsize=7,
-                color="tab:red",
-            )
-    ax.set_xlabel("input speed [rpm]")
-    ax.set_ylabel("damped natural frequency [Hz]")
-    title = "Campbell diagram (time-averaged system); circles: critical speeds"
-    if stability is not None:
-        title += "\n" + (
-            f"Floquet: {len(stability.ranges)} unstable range(s) shaded"
-            if stability.ranges
-            else "Floquet: stable at every speed"
-        )
-    ax.set_title(title)
-    ax.grid(alpha=0.3)
-    if shown:
-        ax.legend(fontsize=8, loc="upper left")
-    zeta = np.asarray(result.damping_ratio)
-    below = np.nanmin(np.where(np.isfinite(freq), freq, np.inf), axis=0) <= fmax
-    zeta = zeta[:, below] if below.any() else zeta
-    for j in range(zeta.shape[1]):
-        axd.plot(rpm, zeta[:, j], "-o", ms=2.5, lw=0.8, label=f"mode {j}" if j < 10 else None)
-    axd.axhline(0.0, color="tab:red", lw=1.0)
-    finite = zeta[np.isfinite(zeta)]
-    if finite.size == 0 or np.abs(finite).max() < 1e-9:  # undamped: rounding noise only
-        axd.set_ylim(-0.01, 0.01)
-        axd.text(
-            0.5,
-            0.6,
-            "undamped (|damping ratio| < 1e-9)",
-            transform=axd.transAxes,
-            ha="center",
-            fontsize=9,
-            color="0.3",
-        )
-    axd.set_xlim(rpm[0], rpm[-1])
-    axd.set_xlabel("input speed [rpm]")
-    axd.set_ylabel("damping ratio [-]")
-    axd.grid(alpha=0.3)
-    if zeta.shape[1]:
-        axd.legend(fontsize=7, ncol=5, loc="best")
-    return save(fig, path)
+    return save(campbell_figure(result, fmax_hz, stability), path)
 
 
 def _default_fmax(freq: np.ndarray, result: Any) -> float:
@@ -170,8 +213,7 @@ def _default_fmax(freq: np.ndarray, result: Any) -> float:
 
 
 def plot_critical_map(result: Any, path: str | Path) -> Path:
-    """Undamped critical-speed map as a PNG: critical speeds [rpm] against bearing stiffness
-    [N/m], log-log, one line per critical speed; each bearing's own stiffness dashed.
+    """Undamped critical-speed map as a PNG (:func:`critical_map_figure`).
 
     >>> import numpy as np, tempfile, pathlib
     >>> from rheolin.stability.critical_map import CriticalSpeedMap
@@ -180,6 +222,12 @@ def plot_critical_map(result: Any, path: str | Path) -> Path:
     >>> plot_critical_map(r, pathlib.Path(tempfile.mkdtemp()) / "m.png").stat().st_size > 1000
     True
     """
+    return save(critical_map_figure(result), path)
+
+
+def critical_map_figure(result: Any) -> Figure:
+    """Critical speeds [rpm] against bearing stiffness [N/m], log-log, one line per critical
+    speed; each bearing's own stiffness dashed."""
     fig, axes = new_figure(1, 1, (8, 6))
     ax = axes[0, 0]
     k = np.asarray(result.stiffness)
@@ -192,12 +240,19 @@ def plot_critical_map(result: Any, path: str | Path) -> Path:
         if value > 0 and round(value, 3) not in seen:
             seen.add(round(value, 3))
             ax.axvline(value, color="0.3", ls="--", lw=0.9)
-            ax.annotate(f"{name}: {value:.3g} N/m", (value, 0.02),
-                        xycoords=("data", "axes fraction"), rotation=90, fontsize=7,
-                        ha="right", va="bottom", color="0.3")  # fmt: skip
+            ax.annotate(
+                f"{name}: {value:.3g} N/m",
+                (value, 0.02),
+                xycoords=("data", "axes fraction"),
+                rotation=90,
+                fontsize=7,
+                ha="right",
+                va="bottom",
+                color="0.3",
+            )
     ax.set_xlabel("bearing stiffness [N/m] (isotropic, every bearing varied)")
     ax.set_ylabel("undamped critical speed [rpm]")
     ax.set_title("undamped critical-speed map (forward synchronous whirl)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8, loc="upper left")
-    return save(fig, path)
+    return fig

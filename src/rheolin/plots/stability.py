@@ -62,13 +62,16 @@ def plot_stability(map: Any, path: str | Path) -> Path:
         ax.set_yscale("symlog", linthresh=linthresh)
     else:  # all damped: a linear axis from the most damped value up to the boundary
         ax.set_ylim(-1.15 * scale, 0.15 * scale)
-    ax.fill_between(rpm, -tol, tol, color="0.8", lw=0, label="decision tolerance")
+    visible = tol.size and float(np.nanmax(tol)) > 0.005 * scale  # else a hairline: no entry
+    ax.fill_between(rpm, -tol, tol, color="0.8", lw=0,
+                    label="decision tolerance" if visible else None)  # fmt: skip
     ax.plot(rpm, mr, "-", color="tab:blue", lw=1.2, label="largest Floquet real part")
     undecided = _undecided(map, len(rpm))
     bad = ~np.asarray(map.stable, bool) & ~undecided
     good = ~bad & ~undecided
     ax.plot(rpm[good], mr[good], "o", ms=3, color="tab:blue")
-    ax.plot(rpm[bad], mr[bad], "o", ms=4, color="tab:red", label="unstable")
+    if bad.any():  # a legend entry only for what is drawn
+        ax.plot(rpm[bad], mr[bad], "o", ms=4, color="tab:red", label="unstable")
     if undecided.any():
         ax.plot(rpm[undecided], mr[undecided], "x", ms=7, color="k", label="verdict undecided")
         edges = np.concatenate([[rpm[0]], 0.5 * (rpm[1:] + rpm[:-1]), [rpm[-1]]])

@@ -10,11 +10,12 @@ import matplotlib
 import numpy as np
 from matplotlib.cm import ScalarMappable
 from matplotlib.colors import LogNorm, Normalize
+from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from ._common import new_figure, save
 
-__all__ = ["QUANTITIES", "parameter_plot", "study_quantity"]
+__all__ = ["QUANTITIES", "parameter_figure", "parameter_plot", "study_quantity"]
 
 #: Outputs that :func:`parameter_plot` can show: variable, reduction, label, scale.
 QUANTITIES = {
@@ -55,10 +56,16 @@ def study_quantity(ds: Any, quantity: str) -> Any:
 
 
 def parameter_plot(result: Any, path: str, file: str | Path, quantity: str = "response") -> Path:
+    """One parameter of a study as a PNG (:func:`parameter_figure`)."""
+    return save(parameter_figure(result, path, quantity), file)
+
+
+def parameter_figure(result: Any, path: str, quantity: str = "response") -> Figure:
     """One parameter of a study: top, ``quantity`` over speed and the parameter (colour;
-    unstable points crossed, failed points grey); bottom, the unstable speed ranges of every
-    value of the parameter, coloured by mechanism. Other parameters are held at their
-    middle value (said in the title).
+    unstable points crossed, failed points grey); bottom, when there are any, the unstable
+    speed ranges of every value of the parameter, coloured by mechanism (else the title says
+    that there are none). Other parameters are held at their middle value (said in the
+    title).
 
     ``result`` is a :class:`~rheolin.study.StudyResult`.
     """
@@ -78,8 +85,13 @@ def parameter_plot(result: Any, path: str, file: str | Path, quantity: str = "re
         verdict = sds["stable"].reindex(speed=spec.speeds).isel(fixed)
         unstable |= verdict.transpose(path, "speed").values.astype(float) == 0
     failed = sel["status"].transpose(path, "speed").values < 0
-    fig, axes = new_figure(2, 1, (9, 9.5))
-    ax, rg = axes[0, 0], axes[1, 0]
+    ranges = _ranges_of(result, spec, path, fixed)
+    if ranges:
+        fig, axes = new_figure(2, 1, (9, 9.5))
+        ax, rg = axes[0, 0], axes[1, 0]
+    else:  # nothing to draw below: the verdict goes into the title
+        fig, axes = new_figure(1, 1, (9, 5.8))
+        ax, rg = axes[0, 0], None
     log = quantity != "max_floquet_real"
     unit = f" [{p.unit}]" if p.unit else ""
     if y.size <= LINES:
@@ -88,17 +100,24 @@ def parameter_plot(result: Any, path: str, file: str | Path, quantity: str = "re
         _heat_map(fig, ax, rpm, y, z, unstable, failed, log, quantity)
         ax.set_ylabel(f"{path}{unit}")
     ax.set_xlabel("input speed [rpm]")
-    rg.set_ylabel(f"{path}{unit}")
-    rg.set_xlabel("input speed [rpm]")
-    if y.size > 1 and y.min() > 0 and y.max() / y.min() > 20:
-        rg.set_yscale("log")
-        if y.size > LINES:
-            ax.set_yscale("log")
+    wide = y.size > 1 and y.min() > 0 and y.max() / y.min() > 20
+    if wide and y.size > LINES:
+        ax.set_yscale("log")
     held = ", ".join(spec.parameters[i].describe(j) for i, j in _held(spec, fixed))
     what = QUANTITIES[quantity][1].split(" [")[0]
-    ax.set_title(f"{what}\nover speed and {path}" + (f" ({held})" if held else ""), fontsize=10)
-    _ranges(rg, result, spec, path, fixed, y, rpm)
-    return save(fig, file)
+    title = f"{what}\nover speed and {path}" + (f" ({held})" if held else "")
+    if rg is None:
+        title += "\n" + (
+            "stability map not computed" if not result.maps else "no unstable range at any value"
+        )
+    ax.set_title(title, fontsize=10)
+    if rg is not None:
+        rg.set_ylabel(f"{path}{unit}")
+        rg.set_xlabel("input speed [rpm]")
+        if wide:
+            rg.set_yscale("log")
+        _ranges(rg, ranges, y, rpm)
+    return fig
 
 
 def _lines(
@@ -156,46 +175,42 @@ def _legend(ax: Any, unstable: Any, failed: Any) -> None:
         ax.legend(handles=handles, fontsize=8, loc="upper right")
 
 
-def _ranges(
-    ax: Any, result: Any, spec: Any, path: str, fixed: dict, y: np.ndarray, rpm: Any
-) -> None:
-    """Unstable ranges (bars) against the parameter."""
+def _ranges_of(result: Any, spec: Any, path: str, fixed: dict[str, int]) -> list[tuple[float, Any]]:
+    """The unstable ranges of every value of parameter ``path`` (the others held at
+    ``fixed``): ``(value, range)`` pairs."""
     index = [q.path for q in spec.parameters].index(path)
-    step = np.diff(y).min() if y.size > 1 else 1.0
-    height = 0.6 * step
-    seen: set[str] = set()
-    count = 0
+    out = []
     for combo, smap in sorted(result.maps.items()):
-        values = dict(spec.assignments(combo))
-        at = {q.path: i for q, i in values.items()}
+        at = {q.path: i for q, i in spec.assignments(combo)}
         if any(at[k] != v for k, v in fixed.items()):
             continue
         yv = spec.parameters[index].values[at[path]]
-        for r in smap.ranges:
-            lo, hi = r.lower * 30 / np.pi, r.upper * 30 / np.pi
-            colour = _COLOURS.get(r.mechanism, "0.3")
-            label = r.mechanism if r.mechanism not in seen else None
-            seen.add(r.mechanism)
-            if ax.get_yscale() == "log":
-                ax.fill_between(
-                    [lo, hi], yv / 1.08, yv * 1.08, color=colour, alpha=0.6, label=label, lw=0
-                )
-            else:
-                ax.barh(yv, hi - lo, left=lo, height=height, color=colour, alpha=0.6, label=label)
-            count += 1
+        out += [(yv, r) for r in smap.ranges]
+    return out
+
+
+def _ranges(ax: Any, ranges: list[tuple[float, Any]], y: np.ndarray, rpm: Any) -> None:
+    """Unstable ranges (bars) against the parameter, coloured by mechanism."""
+    step = np.diff(y).min() if y.size > 1 else 1.0
+    height = 0.6 * step
+    seen: set[str] = set()
+    for yv, r in ranges:
+        lo, hi = r.lower * 30 / np.pi, r.upper * 30 / np.pi
+        colour = _COLOURS.get(r.mechanism, "0.3")
+        label = r.mechanism if r.mechanism not in seen else None
+        seen.add(r.mechanism)
+        if ax.get_yscale() == "log":
+            ax.fill_between(
+                [lo, hi], yv / 1.08, yv * 1.08, color=colour, alpha=0.6, label=label, lw=0
+            )
+        else:
+            ax.barh(yv, hi - lo, left=lo, height=height, color=colour, alpha=0.6, label=label)
     ax.set_xlim(rpm[0], rpm[-1])
-    if y.size:
-        pad = 0.5 * step if ax.get_yscale() != "log" else 0.0
-        ax.set_ylim(y.min() - pad, y.max() + pad) if pad else None
+    if y.size and ax.get_yscale() != "log":
+        ax.set_ylim(y.min() - 0.5 * step, y.max() + 0.5 * step)
     ax.grid(alpha=0.3)
-    if not result.maps:
-        title = "unstable ranges: stability map not computed"
-    elif count == 0:
-        title = "no unstable range at any value"
-    else:
-        title = f"unstable speed ranges ({count}), by mechanism"
-        ax.legend(fontsize=8, loc="upper right")
-    ax.set_title(title, fontsize=10)
+    ax.set_title(f"unstable speed ranges ({len(ranges)}), by mechanism", fontsize=10)
+    ax.legend(fontsize=8, loc="upper right")
 
 
 def _held(spec: Any, fixed: dict[str, int]) -> list[tuple[int, int]]:

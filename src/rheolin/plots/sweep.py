@@ -9,10 +9,12 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 from matplotlib.colors import LogNorm
+from matplotlib.figure import Figure
 
-from ._common import new_figure, save
+from ._common import new_figure, save, shown_harmonics
+from .layout import drop_overlapping
 
-__all__ = ["sweep_plot"]
+__all__ = ["sweep_figure", "sweep_plot"]
 
 
 def sweep_plot(
@@ -24,8 +26,13 @@ def sweep_plot(
     upper bound of the peak); bottom: waterfall (speed vs frequency, colour = amplitude at the
     most responsive node) with shaft and mesh orders. Unstable speeds are shaded red:
     per-speed ``stable == 0`` and the given ``unstable_ranges_rpm``; unchecked speeds are grey
-    ticks at the bottom."""
-    fig, axes = new_figure(2, 1, (9, 9))
+    ticks at the bottom (:func:`sweep_figure`)."""
+    return save(sweep_figure(ds, unstable_ranges_rpm), path)
+
+
+def sweep_figure(ds: xr.Dataset, unstable_ranges_rpm: Sequence[tuple[float, float]] = ()) -> Figure:
+    """The figure of :func:`sweep_plot`."""
+    fig, axes = new_figure(2, 1, (9, 9.5))
     ax, wf = axes[0, 0], axes[1, 0]
     rpm = ds["speed_rpm"].values
     osc = ds["harmonic"] > 0
@@ -71,27 +78,46 @@ def sweep_plot(
     amp = resp.sel(node=node).values * 1e6  # (speed, harmonic); NaN where a point failed
     freq = ds["frequency"].values
     top = float(np.nanmax(amp))
-    ok = amp > top * 1e-6
+    ok = np.zeros(amp.shape, bool)
+    for i in range(amp.shape[0]):  # the harmonics each speed's spectrum shows
+        ok[i] = shown_harmonics(amp[i], top)
     sc = wf.scatter(
         freq[ok],
         np.broadcast_to(rpm[:, None], amp.shape)[ok],
         c=amp[ok],
-        s=8 + 40 * (amp[ok] / top) ** 0.5,
+        s=10 + 50 * (amp[ok] / top) ** 0.5,
         cmap="viridis",
         norm=LogNorm(amp[ok].min(), top),
+        zorder=3,
     )
     fig.colorbar(sc, ax=wf, label=f"radial amplitude at {node} [µm]")
     orders = json.loads(ds.attrs.get("marker_orders_json", "{}"))
-    fmax = float(freq.max())
-    for label, order in orders.items():
-        color = "tab:red" if "mesh" in label else "tab:gray"
-        wf.plot(order * rpm / 60, rpm, "--", lw=0.8, color=color)
+    fmax = float(freq[ok].max()) * 1.08 if ok.any() else float(freq.max())
+    texts = []
+    for label, order in sorted(orders.items(), key=lambda kv: ("mesh" not in kv[0], -kv[1])):
+        color = "tab:red" if "mesh" in label else "0.4"
+        wf.plot(order * rpm / 60, rpm, "--", lw=0.8, color=color, zorder=2)
         x_end = order * rpm[-1] / 60
         if x_end <= fmax:
-            wf.annotate(label, (x_end, rpm[-1]), fontsize=7, color=color, rotation=60)
-    wf.set_xlim(0, fmax * 1.02)
+            texts.append(
+                wf.annotate(
+                    label,
+                    (x_end, rpm[-1]),
+                    xytext=(3, -2),
+                    textcoords="offset points",
+                    fontsize=7,
+                    color=color,
+                    va="top",
+                    ha="left",
+                )
+            )
+    wf.set_xlim(0, fmax)
+    wf.set_ylim(rpm[0] - 0.5 * step, rpm[-1] + 0.5 * step)
     wf.set_xlabel("frequency [Hz]")
     wf.set_ylabel("input speed [rpm]")
-    wf.set_title("waterfall (dashed: shaft speeds and mesh frequencies)", fontsize=10)
+    wf.set_title(
+        "waterfall: harmonics within 60 dB (dashed: shaft speeds, mesh frequencies)", fontsize=10
+    )
     wf.grid(alpha=0.3)
-    return save(fig, path)
+    drop_overlapping(texts, keep=[wf.title])
+    return fig

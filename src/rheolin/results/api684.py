@@ -14,7 +14,10 @@ peak gets
 
 A peak whose half-power points lie outside the sampled range has no AF (``None``): extend the
 sweep. The amplitude should be a magnitude (e.g. the major semi-axis of an orbit, or a bearing
-force), sampled finely enough to resolve the peak (a few samples inside its half-power band).
+force), sampled finely enough to resolve the peak: a peak with fewer than
+:data:`MIN_BAND_SAMPLES` samples inside its half-power band is not ``resolved`` (its AF comes
+from interpolating between samples too far apart), and :func:`refinement_speeds` gives the
+speeds to add there (``rheolin sweep --refine-peaks``).
 
 >>> import numpy as np
 >>> w = np.linspace(50.0, 150.0, 2001)      # an SDOF rotor, zeta = 0.05, w_n = 100 rad/s
@@ -30,10 +33,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Peak", "amplification_factors", "required_margin"]
+__all__ = [
+    "MIN_BAND_SAMPLES",
+    "Peak",
+    "amplification_factors",
+    "refinement_speeds",
+    "required_margin",
+    "separation_margin",
+]
 
 #: Below this amplification factor a resonance is critically damped (no margin required).
 CRITICALLY_DAMPED = 2.5
+#: A peak is resolved with at least this many samples inside its half-power band (an SDOF
+#: sampled so: its AF within 2.5 % of the closed form; bench figures in the commit message).
+MIN_BAND_SAMPLES = 5
 
 
 def required_margin(af: float | None, below: bool) -> float:
@@ -63,6 +76,14 @@ class Peak:
     margin: float | None = None
     #: What API 617 requires of this peak (0 when critically damped).
     required: float | None = None
+    #: Samples strictly inside the half-power band ``(lower, upper)`` (0 without an AF).
+    samples: int = 0
+
+    @property
+    def resolved(self) -> bool:
+        """At least :data:`MIN_BAND_SAMPLES` samples inside the half-power band: the AF is
+        not an interpolation across a coarse step."""
+        return self.samples >= MIN_BAND_SAMPLES
 
     @property
     def acceptable(self) -> bool | None:
@@ -129,13 +150,53 @@ def amplification_factors(
         af = float(peak_s / (hi - lo)) if lo is not None and hi is not None and hi > lo else None
         margin = required = None
         if operating is not None:
-            n_min, n_max = operating
-            if peak_s < n_min:
-                margin, required = (n_min - peak_s) / n_min, required_margin(af, True)
-            elif peak_s > n_max:
-                margin, required = (peak_s - n_max) / n_max, required_margin(af, False)
-            else:
-                margin = -min(peak_s - n_min, n_max - peak_s) / max(n_max, 1e-300)
-                required = required_margin(af, peak_s - n_min < n_max - peak_s)
-        out.append(Peak(float(peak_s), float(peak_a), lo, hi, af, margin, required))
+            margin, required = separation_margin(float(peak_s), af, operating)
+        inside = int(((s > lo) & (s < hi)).sum()) if af is not None else 0
+        out.append(Peak(float(peak_s), float(peak_a), lo, hi, af, margin, required, inside))
     return out
+
+
+def separation_margin(
+    speed: float, af: float | None, operating: tuple[float, float]
+) -> tuple[float, float]:
+    """``(margin, required)`` of a resonance at ``speed`` with amplification factor ``af``
+    from the operating range ``(N_min, N_max)``: the distance to the nearest operating limit
+    as a fraction of it (negative inside the range) and what API 617 requires.
+
+    >>> [round(x, 4) for x in separation_margin(80.0, 10.0, (100.0, 120.0))]
+    [0.2, 0.15]
+    """
+    n_min, n_max = operating
+    if speed < n_min:
+        return (n_min - speed) / n_min, required_margin(af, True)
+    if speed > n_max:
+        return (speed - n_max) / n_max, required_margin(af, False)
+    margin = -min(speed - n_min, n_max - speed) / max(n_max, 1e-300)
+    return margin, required_margin(af, speed - n_min < n_max - speed)
+
+
+def refinement_speeds(
+    peak: Peak, speeds: np.ndarray, samples: int = MIN_BAND_SAMPLES
+) -> np.ndarray:
+    """Speeds to add around an unresolved ``peak`` of a response sampled at ``speeds`` so
+    that its half-power band holds about ``samples + 3`` of them: spaced by the band's width
+    (as estimated; between the peak's neighbouring samples when it has none) over
+    ``samples + 3``, over 1.5 bands centred on the peak; speeds already sampled left out.
+
+    >>> w = np.array([50.0, 90.0, 100.0, 110.0, 150.0])
+    >>> p = Peak(100.0, 1.0, 95.0, 105.0, 10.0, samples=1)
+    >>> new = refinement_speeds(p, w)
+    >>> new.size, float(new.min()), float(new.max()), bool(np.all(np.diff(new) > 0))
+    (12, 92.5, 107.5, True)
+    """
+    s = np.sort(np.asarray(speeds, dtype=float))
+    if peak.lower is not None and peak.upper is not None and peak.upper > peak.lower:
+        band = peak.upper - peak.lower
+    else:
+        i = int(np.argmin(np.abs(s - peak.speed)))
+        band = float(s[min(i + 1, s.size - 1)] - s[max(i - 1, 0)]) / 2
+    step = band / (samples + 3)
+    grid = peak.speed + step * np.arange(-round(0.75 * band / step), round(0.75 * band / step) + 1)
+    grid = grid[(grid > 0) & (grid >= s[0]) & (grid <= s[-1])]
+    near = np.abs(grid[:, None] - s[None, :]).min(axis=1) < 1e-9 * max(float(s[-1]), 1.0)
+    return np.asarray(grid[~near])

@@ -2,9 +2,10 @@
 
 Complex two-sided coefficients are stored with a trailing ``part`` dimension
 (``part = ["real", "imag"]``), which every NetCDF reader understands;
-:func:`complex_values` turns such a variable back into complex numbers. Only the harmonics
-``n >= 0`` are stored (``x_{-n} = conj(x_n)``); the amplitude of harmonic ``n > 0`` of a
-real signal is ``2 |x_n|``.
+:func:`complex_values` turns such a variable back into the complex ``x_n``, and
+:func:`complex_amplitude` into the single-sided complex amplitude ``A_n`` (``2 x_n`` for
+``n > 0``, ``x_0`` for the mean), with ``x(t) = Re sum_{n >= 0} A_n exp(i n w1 t)``. Only the
+harmonics ``n >= 0`` are stored (``x_{-n} = conj(x_n)``). Units: :mod:`rheolin.results.units`.
 """
 
 from __future__ import annotations
@@ -24,8 +25,10 @@ from ..mechanics.joints import COMPONENTS
 from ..solvers.solution import Solution
 from .compute import OperatingPoint
 from .outputs import bearing_force_array, transmission_error_array
+from .units import significant, with_units
 
 __all__ = [
+    "complex_amplitude",
     "complex_values",
     "floquet_attrs",
     "frequency_markers",
@@ -97,6 +100,30 @@ def complex_values(da: xr.DataArray) -> xr.DataArray:
     return da.sel(part="real") + 1j * da.sel(part="imag")
 
 
+def complex_amplitude(data: xr.Dataset | xr.DataArray) -> Any:
+    """Single-sided complex amplitudes of a results variable (or of every variable of a
+    Dataset that has a ``part`` axis): ``2 x_n`` for the harmonics ``n > 0``, ``x_0`` for
+    the mean, so that ``x(t) = Re sum_{n >= 0} A_n exp(i n w1 t)``; a variable without a
+    ``harmonic`` axis (an FRF's receptance: the response to ``F cos(w t)`` is
+    ``Re(q e^{i w t})``) is its complex value. Units and attributes are kept.
+
+    >>> da = xr.DataArray([[0.5, 0.0], [1.0, 2.0]], dims=("harmonic", "part"),
+    ...                   coords={"harmonic": [0, 3], "part": ["real", "imag"]},
+    ...                   attrs={"units": "m"})
+    >>> a = complex_amplitude(da)
+    >>> a.values.tolist(), a.attrs["units"]
+    ([(0.5+0j), (2+4j)], 'm')
+    """
+    if isinstance(data, xr.Dataset):
+        parts = [n for n in data.data_vars if "part" in data[n].dims]
+        return xr.Dataset({str(n): complex_amplitude(data[n]) for n in parts}, attrs=data.attrs)
+    z = complex_values(data)
+    if "harmonic" in z.dims:
+        z = z * xr.where(z["harmonic"] > 0, 2.0, 1.0)
+    z.attrs = dict(data.attrs)
+    return z
+
+
 def point_dataset(
     point: OperatingPoint, *, model_sha256: str = "", model_name: str = ""
 ) -> xr.Dataset:
@@ -122,7 +149,9 @@ def point_dataset(
         "body": ("node", [b for b, _ in nodes]),
         "node_index": ("node", np.array([i for _, i in nodes])),
         "component": ("component", list(COMPONENTS)),
+        "component_units": ("component", [_UNITS[c] for c in COMPONENTS]),
         "force_component": ("force_component", list(_FORCE_UNITS)),
+        "force_component_units": ("force_component", list(_FORCE_UNITS.values())),
         "part": ("part", ["real", "imag"]),
         "xyz": ("xyz", ["x", "y", "z"]),
     }
@@ -167,7 +196,7 @@ def point_dataset(
             "rheolin_version": __version__,
             "speed": a.speed,
             "speed_units": "rad/s",
-            "speed_rpm": a.speed * 30 / math.pi,
+            "speed_rpm": significant(a.speed * 30 / math.pi),
             "base_frequency": a.omega,
             "base_frequency_units": "rad/s",
             "method": sol.method,
@@ -221,11 +250,11 @@ def frequency_markers(a: Assembled) -> dict[str, float]:
 
 
 def write_dataset(ds: xr.Dataset, path: str | Path) -> Path:
-    """Write NetCDF atomically: temporary file, then rename (see :func:`netcdf_engine`)."""
+    """Write NetCDF atomically: temporary file, then rename (see :func:`netcdf_engine`); the
+    units of the names :data:`~rheolin.results.units.UNITS` knows filled where missing."""
     engine = netcdf_engine()
-    out = ds
+    out = with_units(ds)
     if engine == "scipy":  # NetCDF3 has no int64
-        out = ds.copy()
         for name, var in list(out.variables.items()):
             if var.dtype == np.int64:
                 out[name] = var.astype(np.int32)

@@ -22,7 +22,7 @@ has the lattice ``{0}`` and the classical ``H(w) = (K - w^2 M + i w (D + W G))^-
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -42,6 +42,7 @@ __all__ = [
     "FrequencyResponse",
     "frequency_response",
     "parse_dof",
+    "receptance_unit",
     "system_frequency_response",
 ]
 
@@ -53,6 +54,22 @@ DEFAULT_ORDER = 2
 BOUNDARY_WARN = 1e-3
 
 COMPONENTS = ("ux", "uy", "uz", "phix", "phiy", "phiz")
+
+
+def receptance_unit(output: str, inp: str, unbalance: bool = False) -> str:
+    """The unit of a receptance from DOF ``inp`` to DOF ``output`` (labels
+    ``body:node:component``; a bare index counts as a translation): ``m/N``, ``rad/N``,
+    ``m/(N m)``, ``rad/(N m)``, or per kg m of unbalance.
+
+    >>> receptance_unit("r:1:ux", "r:1:ux"), receptance_unit("r:1:phiz", "r:0:phiz")
+    ('m/N', 'rad/(N m)')
+    >>> receptance_unit("r:1:uy", "r:1:ux", unbalance=True)
+    'm/(kg m)'
+    """
+    top = "rad" if str(output).rsplit(":", 1)[-1].startswith("phi") else "m"
+    if unbalance:
+        return f"{top}/(kg m)"
+    return f"{top}/(N m)" if str(inp).rsplit(":", 1)[-1].startswith("phi") else f"{top}/N"
 
 
 @dataclass
@@ -96,6 +113,37 @@ class FrequencyResponse:
         """``q_0`` per unit input, at the excitation frequency: ``(n_f, n_out, n_in)``."""
         return self.response[:, int(np.flatnonzero(self.sidebands == 0)[0])]
 
+    @classmethod
+    def from_dataset(cls, ds: Any) -> FrequencyResponse:
+        """The response read back from :meth:`to_dataset` (``frf.nc``).
+
+        >>> import numpy as np, rheolin as rl
+        >>> s = rl.PeriodicSystem(1.0, M={0: np.eye(1)}, K={0: 4 * np.eye(1)})
+        >>> r = system_frequency_response(s, [1.0, 3.0], inputs=[0])
+        >>> back = FrequencyResponse.from_dataset(r.to_dataset())
+        >>> bool(np.allclose(back.receptance, r.receptance)), back.inputs
+        (True, ['0'])
+        """
+
+        def joined(da: Any) -> np.ndarray:
+            return np.asarray(da.sel(part="real").values + 1j * da.sel(part="imag").values)
+
+        attrs = ds.attrs
+        return cls(
+            frequencies=np.asarray(ds["frequency"].values, dtype=float) * 2 * np.pi,
+            sidebands=np.asarray(ds["sideband"].values, dtype=np.int64),
+            response=joined(ds["sideband_response"]),
+            inputs=[str(v) for v in ds["input"].values],
+            outputs=[str(v) for v in ds["output"].values],
+            omega=float(attrs.get("base_frequency_rad_s", float("nan"))),
+            speed=float(attrs.get("speed_rad_s", float("nan"))),
+            unbalance=bool(attrs.get("unbalance", 0)),
+            info={
+                "lattice_order": int(attrs.get("lattice_order", 0)),
+                "boundary_fraction": float(attrs.get("boundary_fraction", 0.0)),
+            },
+        )
+
     def to_dataset(self) -> Any:
         """The FRF as an ``xarray.Dataset`` (complex values on a trailing ``part`` axis).
 
@@ -107,27 +155,38 @@ class FrequencyResponse:
         """
         import xarray as xr
 
+        from .units import significant
+
         def parts(z: np.ndarray) -> np.ndarray:
             return np.stack([z.real, z.imag], axis=-1)
 
         hz = self.frequencies / (2 * np.pi)
-        unit = "per kg m of unbalance" if self.unbalance else "per N (or N m) of input"
+        units = np.array(
+            [[receptance_unit(o, i, self.unbalance) for i in self.inputs] for o in self.outputs],
+            dtype=str,
+        )
+        unit = (
+            str(units.flat[0])
+            if len(set(units.flat)) == 1
+            else "per output and input: receptance_units"
+        )
         return xr.Dataset(
             {
                 "receptance": (
                     ("frequency", "output", "input", "part"),
                     parts(self.receptance),
-                    {"description": f"response at the excitation frequency, {unit}"},
+                    {"units": unit, "long_name": "response at the excitation frequency"},
                 ),
                 "sideband_response": (
                     ("frequency", "sideband", "output", "input", "part"),
                     parts(self.response),
-                    {"description": "response at w + h w1 (h = sideband), " + unit},
+                    {"units": unit, "long_name": "response at w + h w1 (h = sideband)"},
                 ),
+                "receptance_units": (("output", "input"), units, {"units": "1"}),
             },
             coords={
                 "frequency": ("frequency", hz, {"units": "Hz"}),
-                "sideband": ("sideband", self.sidebands.astype(np.int64)),
+                "sideband": ("sideband", self.sidebands.astype(np.int64), {"units": "1"}),
                 "sideband_offset": (
                     "sideband",
                     self.sidebands * self.omega / (2 * np.pi),
@@ -139,6 +198,7 @@ class FrequencyResponse:
             },
             attrs={
                 "speed_rad_s": float(self.speed),
+                "speed_rpm": significant(float(self.speed) * 30 / np.pi),
                 "base_frequency_rad_s": float(self.omega),
                 "unbalance": int(self.unbalance),
                 "lattice_order": int(self.info.get("lattice_order", 0)),
@@ -217,6 +277,7 @@ def frequency_response(
     order: int | None = None,
     unbalance: bool = False,
     budget: Any = None,
+    progress: Callable[[int], None] | None = None,
 ) -> FrequencyResponse:
     """FRF of ``model`` turning at ``speed`` [rad/s], over excitation ``frequencies`` [rad/s].
 
@@ -224,7 +285,7 @@ def frequency_response(
     outputs default to the inputs). A unit force (or moment) at each input in turn, at each
     frequency; ``unbalance=True`` scales it by ``w^2`` (the force of a unit ``m e`` turning at
     ``w``). ``order``: the lattice order for a time-periodic model (default 2). See the module
-    docstring for the convention.
+    docstring for the convention. ``progress(done)`` is called after each frequency.
 
     >>> import numpy as np, rheolin as rl
     >>> m = rl.Model()
@@ -244,7 +305,14 @@ def frequency_response(
         return x if isinstance(x, str) else f"{x[0]}:{x[1]}:{x[2]}"
 
     res = system_frequency_response(
-        assembled.system, frequencies, inp, out, order=order, unbalance=unbalance, budget=budget
+        assembled.system,
+        frequencies,
+        inp,
+        out,
+        order=order,
+        unbalance=unbalance,
+        budget=budget,
+        progress=progress,
     )
     res.inputs = [name(x) for x in inputs]
     res.outputs = res.inputs if outputs is None else [name(x) for x in outputs]
@@ -261,6 +329,7 @@ def system_frequency_response(
     order: int | None = None,
     unbalance: bool = False,
     budget: Any = None,
+    progress: Callable[[int], None] | None = None,
 ) -> FrequencyResponse:
     """:func:`frequency_response` of a :class:`~rheolin.PeriodicSystem` (DOFs by index)."""
     w = np.atleast_1d(np.asarray(frequencies, dtype=float))
@@ -311,6 +380,8 @@ def system_frequency_response(
     name = resolve_backend("auto", (pattern.indptr, pattern.indices, pattern.shape[0]))
     analysis = analyze(name, pattern.indptr, pattern.indices, True, sample=pattern.data)
     for i, wi in enumerate(w):
+        if progress is not None:
+            progress(i)
         Q = hill.Q(1j * wi)  # the same pattern at every frequency: one symbolic analysis
         x = _solve(analysis, Q, rhs)
         if x is None:  # singular: an undamped resonance, or a free body at 0
@@ -323,6 +394,8 @@ def system_frequency_response(
             worst = max(worst, float(np.max(per[boundary].sum(axis=0) / np.maximum(total, 1e-300))))
         scale = wi * wi if unbalance else 1.0
         resp[i] = scale * np.einsum("oj,hji->hoi", C_out, x.reshape(nh, n, inp.size))
+    if progress is not None:
+        progress(w.size)
     info: dict[str, Any] = {
         "sparse_backend": name,
         "lattice_order": lat.order,

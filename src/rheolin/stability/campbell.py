@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -81,30 +82,55 @@ class CampbellResult:
         return np.vectorize(_whirl_label, otypes=[object])(self.whirl_ratio)
 
     def to_dataset(self) -> Any:
-        """The diagram as an ``xarray.Dataset`` (dims ``speed``, ``mode``, ``order``, ``critical``).
+        """The diagram as an ``xarray.Dataset`` (dims ``speed``, ``mode``, ``order``,
+        ``critical``), in the files' units (:mod:`rheolin.results.units`): speeds in rad/s
+        with ``*_rpm`` beside them, frequencies in Hz.
 
         >>> import numpy as np
         >>> r = CampbellResult(np.array([1.0, 2.0]), np.ones((2, 1)), np.zeros((2, 1)),
         ...                    np.zeros((2, 1)), np.ones((2, 1)), {"1x s": 1.0})
         >>> ds = r.to_dataset()
-        >>> ds["frequency"].dims, ds["order_ratio"].values.tolist()
-        (('speed', 'mode'), [1.0])
+        >>> ds["frequency"].dims, ds["order_ratio"].values.tolist(), ds["frequency"].attrs["units"]
+        (('speed', 'mode'), [1.0], 'Hz')
         """
         import xarray as xr
 
+        from ..results.units import significant
+
         crit = self.critical_speeds
+        hz = 1.0 / (2 * np.pi)
+        rpm = 30 / np.pi
+        one = {"units": "1"}
+        speed_c = np.array([c.speed for c in crit], float)
         ds = xr.Dataset(
             {
-                "frequency": (("speed", "mode"), self.frequency),
-                "damping_ratio": (("speed", "mode"), self.damping_ratio),
-                "log_decrement": (("speed", "mode"), self.log_decrement),
-                "whirl_ratio": (("speed", "mode"), self.whirl_ratio),
+                "frequency": (
+                    ("speed", "mode"),
+                    self.frequency * hz,
+                    {"units": "Hz", "long_name": "damped natural frequency"},
+                ),
+                "damping_ratio": (("speed", "mode"), self.damping_ratio, one),
+                "log_decrement": (("speed", "mode"), self.log_decrement, one),
+                "whirl_ratio": (("speed", "mode"), self.whirl_ratio, one),
                 "whirl": (("speed", "mode"), self.whirl.astype(str)),
-                "order_ratio": (("order",), np.array(list(self.orders.values()), dtype=float)),
-                "critical_speed": (("critical",), np.array([c.speed for c in crit], float)),
-                "critical_frequency": (("critical",), np.array([c.frequency for c in crit], float)),
+                "order_ratio": (
+                    ("order",),
+                    np.array(list(self.orders.values()), dtype=float),
+                    {"units": "1", "long_name": "order-line frequency per unit input speed"},
+                ),
+                "critical_speed": (("critical",), speed_c, {"units": "rad/s"}),
+                "critical_speed_rpm": (
+                    ("critical",),
+                    np.array([significant(x) for x in speed_c * rpm], float),
+                    {"units": "rpm"},
+                ),
+                "critical_frequency": (
+                    ("critical",),
+                    np.array([c.frequency for c in crit], float) * hz,
+                    {"units": "Hz"},
+                ),
                 "critical_order": (("critical",), np.array([c.order for c in crit], dtype=str)),
-                "critical_mode": (("critical",), np.array([c.mode for c in crit], dtype=int)),
+                "critical_mode": (("critical",), np.array([c.mode for c in crit], dtype=int), one),
                 "critical_whirl": (("critical",), np.array([c.whirl for c in crit], dtype=str)),
                 "critical_kind": (("critical",), np.array([c.kind for c in crit], dtype=str)),
                 "kind": (
@@ -117,13 +143,16 @@ class CampbellResult:
                 ),
             },
             coords={
-                "speed": self.speeds,
-                "mode": np.arange(self.frequency.shape[1]),
+                "speed": ("speed", self.speeds, {"units": "rad/s"}),
+                "speed_rpm": (
+                    "speed",
+                    np.array([significant(x) for x in self.speeds * rpm], float),
+                    {"units": "rpm"},
+                ),
+                "mode": ("mode", np.arange(self.frequency.shape[1]), one),
                 "order": np.array(list(self.orders), dtype=str),
             },
         )
-        ds["speed"].attrs["units"] = "rad/s"
-        ds["frequency"].attrs.update(units="rad/s", long_name="damped natural frequency")
         ds.attrs["title"] = "Campbell diagram of the time-averaged system"
         ds.attrs["branches"] = "tracked by mode shape (MAC)" if self.tracked else "sorted"
         return ds
@@ -171,6 +200,7 @@ def campbell(
     n_modes: int | None = None,
     method: str = "auto",
     track: bool = True,
+    progress: Callable[[int], None] | None = None,
 ) -> CampbellResult:
     """Campbell diagram of a :class:`~rheolin.mechanics.Model` over input speeds.
 
@@ -195,6 +225,8 @@ def campbell(
         Number of lowest modes kept (default: all for small models, 12 for large ones).
     method
         Eigen-solver for the averaged system: ``"auto"``, ``"dense"``, ``"sparse"``.
+    progress
+        Called with the number of speeds done after each speed.
 
     Examples
     --------
@@ -228,6 +260,8 @@ def campbell(
         ratio = whirl_ratio(modes.shapes, a.dof_labels, axes, a.plan.spin)
         energy = mode_energy(modes.shapes, a.dof_labels, axes, a.system.M[0])
         rows.append((modes, ratio, mode_kind(energy, ratio)))
+        if progress is not None:
+            progress(len(rows))
     width = max(m.eigenvalues.size for m, _, _ in rows)
     if n_modes is not None:
         width = min(width, int(n_modes))

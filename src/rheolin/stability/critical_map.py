@@ -63,7 +63,7 @@ class CriticalSpeedMap:
     actual: dict[str, float] = field(default_factory=dict)
 
     def to_dataset(self) -> Any:
-        """The map as an ``xarray.Dataset`` (speeds in rpm).
+        """The map as an ``xarray.Dataset`` (speeds in rad/s, ``critical_speed_rpm`` beside).
 
         >>> r = CriticalSpeedMap(np.array([1e6]), np.array([[100.0, 200.0]]), ["b"], {"b": 1e6})
         >>> r.to_dataset()["critical_speed"].dims
@@ -75,17 +75,23 @@ class CriticalSpeedMap:
             {
                 "critical_speed": (
                     ("stiffness", "mode"),
+                    self.speeds,
+                    {"units": "rad/s", "long_name": "undamped synchronous critical speed"},
+                ),
+                "critical_speed_rpm": (
+                    ("stiffness", "mode"),
                     self.speeds * 30 / np.pi,
-                    {"units": "rpm", "long_name": "undamped synchronous critical speed"},
+                    {"units": "rpm"},
                 ),
                 "actual_stiffness": (
                     ("bearing",),
                     [self.actual.get(b, np.nan) for b in self.bearings],
+                    {"units": "N/m"},
                 ),
             },
             coords={
                 "stiffness": ("stiffness", self.stiffness, {"units": "N/m"}),
-                "mode": np.arange(self.speeds.shape[1]),
+                "mode": ("mode", np.arange(self.speeds.shape[1]), {"units": "1"}),
                 "bearing": list(self.bearings),
             },
         )

@@ -169,7 +169,7 @@ class StabilityMap:
                 "stable": (("speed",), self.stable.astype(bool)),
                 "marginal": (("speed",), self.marginal.astype(bool)),
                 "converged": (("speed",), self.converged.astype(bool)),
-                "frequency": (("speed",), self.frequency),
+                "frequency": (("speed",), self.frequency / (2 * np.pi), {"units": "Hz"}),
                 "range_lower": (("range",), np.array([r.lower for r in rg], float)),
                 "range_upper": (("range",), np.array([r.upper for r in rg], float)),
                 "range_lower_uncertainty": (

@@ -33,6 +33,7 @@ from ..io.atomic import atomic_write
 from ..results.dataset import write_dataset
 from ..results.schema import SCHEMA_VERSION
 from ..results.sweep import STABILITY_STATES
+from ..results.units import significant
 from .store import CheckpointStore
 
 __all__ = ["plot_name", "resonances", "sweep_table", "write_results"]
@@ -83,8 +84,8 @@ def sweep_table(result: Any) -> dict[str, Any]:
             ranges.append(
                 {
                     "parameters": values,
-                    "lower_rpm": r.lower * RPM,
-                    "upper_rpm": r.upper * RPM,
+                    "lower_rpm": significant(r.lower * RPM),
+                    "upper_rpm": significant(r.upper * RPM),
                     "lower_uncertainty_rpm": _finite(r.lower_uncertainty * RPM),
                     "upper_uncertainty_rpm": _finite(r.upper_uncertainty * RPM),
                     "open_below": r.lower_open,
@@ -101,7 +102,7 @@ def sweep_table(result: Any) -> dict[str, Any]:
         failed.append(
             {
                 "parameters": {p.path: p.values[i] for p, i in spec.assignments(combo)},
-                "speed_rpm": float(spec.speeds[spec.speed_of(point)]) * RPM,
+                "speed_rpm": significant(float(spec.speeds[spec.speed_of(point)]) * RPM),
                 "message": message,
             }
         )
@@ -116,7 +117,7 @@ def sweep_table(result: Any) -> dict[str, Any]:
             {"path": p.path, "field": p.field, "unit": p.unit or "SI", "values": list(p.values)}
             for p in spec.parameters
         ],
-        "speeds_rpm": (spec.speeds * RPM).tolist(),
+        "speeds_rpm": [significant(x) for x in spec.speeds * RPM],
         "success": ds["success"].values.astype(bool).tolist(),
         "status": ds["status"].values.tolist(),
         "iterations": ds["iterations"].values.tolist(),
@@ -158,12 +159,14 @@ def resonances(result: Any) -> list[dict[str, Any]]:
                 {
                     "body": str(body),
                     "node": node,
-                    "speed_rpm": p.speed * RPM,
+                    "speed_rpm": significant(p.speed * RPM),
                     "amplitude_m": p.amplitude,
                     "amplification_factor": p.amplification_factor,
                     "half_power_rpm": None
                     if p.lower is None or p.upper is None
-                    else [p.lower * RPM, p.upper * RPM],
+                    else [significant(p.lower * RPM), significant(p.upper * RPM)],
+                    "samples_in_band": p.samples,
+                    "resolved": p.resolved,
                 }
             )
     return out
