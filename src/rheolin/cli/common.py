@@ -64,7 +64,8 @@ RTOL = typer.Option(
 FLOQUET_RTOL = typer.Option(
     None,
     "--floquet-rtol",
-    help="Relative accuracy of the largest Floquet real part (default 1e-4; docs/stability.md).",
+    help="Relative accuracy of the largest Floquet real part (default: 1e-4 for run, not "
+    "refined beyond the verdict's own for sweep and campbell; docs/stability.md).",
 )
 
 

@@ -132,9 +132,10 @@ def floquet(
         ratio of 0.1 % of the exponent near zero; ``inf``: none): the leading exponent's
         cluster is searched again on finer lattices, near it only, until it is met (at most
         :data:`~rheolin.floquet.accuracy.RTOL_ORDERS` orders up, within the memory budget;
-        ``info["accuracy"]`` says what was done). Default: the ``continuation``'s, else
-        ``DEFAULT_RTOL`` (1e-4) with the automatic truncation, none with a given ``order``
-        or lattice.
+        ``info["accuracy"]`` says what was done). Default: ``DEFAULT_RTOL`` (1e-4) with the
+        automatic truncation; over a sweep (a ``continuation``) the continuation's ``rtol``,
+        else none (a run-up needs verdicts, and refining costs 3-5 times the verdict near
+        a resonance: bench/stability.py); none with a given ``order`` or lattice.
 
     Examples
     --------
@@ -161,8 +162,8 @@ def floquet(
     held = system if rigid is None else rigid.reduce(system)
     if rtol is not None and not rtol > 0:
         raise ValueError(f"`rtol` must be a positive number (inf: no refinement), got {rtol!r}")
-    if rtol is None and continuation is not None:
-        rtol = continuation.rtol
+    if rtol is None and continuation is not None:  # over a sweep: refined only on demand
+        rtol = continuation.rtol if continuation.rtol is not None else float("inf")
     if rtol is None and order is None and harmonics is None:
         rtol = DEFAULT_RTOL
     res = _floquet(

@@ -79,7 +79,8 @@ class Continuation:
     Holds one :class:`~rheolin.floquet.LatticeExponents` per lattice order seen (their
     eigenvectors: a few MB for a gearbox); :meth:`clear` forgets them. ``rtol``: the accuracy
     of the largest real part the calls that share it ask for (:func:`rheolin.floquet`'s
-    ``rtol`` when a call gives none), so that a sweep's settings reach every verdict.
+    ``rtol`` when a call gives none; None: no refinement), so that a sweep's settings reach
+    every verdict.
     """
 
     def __init__(self, rtol: float | None = None) -> None:

@@ -29,6 +29,10 @@ __all__ = [
     "mechanism",
     "stability_map",
 ]
+#: Accuracy of the leading exponent asked of an edge's verdict left undecided by its lattice
+#: (at most: a third of its real part is enough to decide it).
+EDGE_RTOL = 0.1
+
 __categories__ = (ROTATING_DAMPING, CIRCULATORY, MESH, ASYMMETRY, COMBINED, UNIDENTIFIED)
 
 
@@ -247,7 +251,7 @@ def stability_map(
         Passed to :func:`rheolin.floquet`.
     rtol
         Relative accuracy of each speed's largest real part (:func:`rheolin.floquet`; None:
-        its default).
+        not refined beyond what the verdict needs, ``max_real_uncertainty`` says how far).
 
     Examples
     --------
@@ -282,9 +286,22 @@ def stability_map(
         return as_harmonic_set(harmonics)
 
     def evaluate(
-        W: float, continuation: Any = None, accuracy: float | None = rtol
+        W: float,
+        continuation: Any = None,
+        accuracy: float | None = rtol,
+        lattice_order: int | None = None,
     ) -> tuple[Any, FloquetResult]:
         a = model.assemble(float(W))
+        if lattice_order is not None:
+            res = floquet(
+                a.system,
+                method="lattice",
+                order=lattice_order,
+                memory_budget=memory_budget,
+                continuation=continuation,
+                rtol=accuracy,
+            )
+            return a, res
         res = floquet(
             a.system,
             truncation(a.system),
@@ -335,8 +352,9 @@ def map_from_results(
     Used by :func:`stability_map`, and by sweeps whose workers check each speed's stability
     as part of the steady-state solve (``Solution.floquet``): only the refinement of the
     range bounds and the naming of the mechanisms are done here. ``evaluate(speed,
-    continuation, accuracy)`` returns ``(assembled, FloquetResult)`` at a speed (default: the
-    model's automatic Floquet verdict); the edges call it with ``accuracy = inf`` (their
+    continuation, accuracy[, lattice_order])`` returns ``(assembled, FloquetResult)`` at a
+    speed (default: the model's automatic Floquet verdict; with ``lattice_order``, the lattice
+    method at that order, not raised); the edges call it with ``accuracy = inf`` (their
     verdicts need to be decided, not refined).
     """
     speeds = np.asarray(speeds_rad_s, dtype=float).ravel()
@@ -345,12 +363,16 @@ def map_from_results(
     count = [0]
 
     def default_evaluate(
-        W: float, continuation: Any = None, accuracy: float | None = None
+        W: float,
+        continuation: Any = None,
+        accuracy: float | None = None,
+        lattice_order: int | None = None,
     ) -> tuple[Any, FloquetResult]:
         a = model.assemble(float(W))
         res = floquet(
             a.system,
-            order=order,
+            method="auto" if lattice_order is None else "lattice",
+            order=order if lattice_order is None else lattice_order,
             memory_budget=memory_budget,
             continuation=continuation,
             rtol=accuracy,
@@ -439,18 +461,57 @@ def _edge(
     refine: float,
 ) -> Any:
     """One range edge between two decided samples, every evaluation a full verdict continued
-    from the previous one (not refined: it needs to be decided)."""
+    from the previous one (its largest real part not refined: the verdict is what counts).
+
+    Between two lattice verdicts the evaluations use the larger of their lattice orders
+    (the edge's speeds need no more than its samples, except within the truncation
+    uncertainty of the crossing). Where that order leaves a speed undecided, its leading
+    exponent is refined near it until its uncertainty is a third of its real part, then the
+    next order decides;
+    a speed still undecided is bracketed by :func:`~rheolin.stability.ranges.refine_edge`.
+    (The automatic verdict would climb through every order up to the one that decides, at
+    ten times the cost.)"""
     from ..floquet import Continuation
 
     cont = Continuation()
+    orders = [_lattice_order(r) for r in (stable[1], unstable[1])]
+    fixed = max(orders) if None not in orders else None  # type: ignore[type-var]
 
     def verdict(W: float) -> FloquetResult:
         count[0] += 1
-        return run(W, cont, float("inf"))[1]
+        if fixed is None:  # the automatic verdict raises its own order where undecided
+            return run(W, cont, float("inf"))[1]
+        res = run(W, cont, float("inf"), fixed)[1]
+        if not res.decided:  # the leading exponent refined near it, enough to decide
+            count[0] += 1
+            res = run(W, cont, _deciding_rtol(res), fixed)[1]
+        if not res.decided:  # then the next order
+            count[0] += 1
+            res = run(W, cont, float("inf"), fixed + 1)[1]
+        return res
 
     return refine_edge(
         verdict, (float(stable[0]), stable[1]), (float(unstable[0]), unstable[1]), refine
     )
+
+
+def _deciding_rtol(res: FloquetResult) -> float:
+    """An ``rtol`` that makes the leading exponent's uncertainty a third of its real part
+    (the target of :func:`~rheolin.floquet.accuracy.target`), at most :data:`EDGE_RTOL`."""
+    from ..floquet.accuracy import ZETA_FLOOR
+
+    re, lam = abs(float(res.max_real)), complex(res.leading)
+    if not (np.isfinite(re) and np.isfinite(lam)) or re == 0:
+        return EDGE_RTOL
+    return float(min(EDGE_RTOL, re / (3.0 * max(re, ZETA_FLOOR * abs(lam)))))
+
+
+def _lattice_order(res: FloquetResult) -> int | None:
+    """The order of the lattice a verdict was decided on (None: not a lattice verdict)."""
+    lattice = getattr(res, "lattice", None)
+    if res.method != "lattice" or lattice is None:
+        return None
+    return int(lattice.order)
 
 
 def _uncertainty(res: FloquetResult) -> float:
