@@ -128,7 +128,9 @@ def refine_edge(
         widths.append(abs(b - a))
     speed = 0.5 * (a + b)
     if dec_a != a or dec_b != b:  # the bracket ends on undecided verdicts: look for decided ones
-        dec_a, dec_b, more, extra = _around_undecided(verdict, speed, grow, dec_a, dec_b, a, b, xtol)
+        dec_a, dec_b, more, extra = _around_undecided(
+            verdict, speed, grow, dec_a, dec_b, a, b, xtol
+        )
         count += more
         undecided += extra
     return Edge(speed, max(abs(speed - dec_a), abs(dec_b - speed)), dec_a, dec_b, count, undecided)
