@@ -7,13 +7,25 @@
 (c) A stability map over 1500-4500 rpm (``--speeds``, default 50 speeds): seconds per speed,
     peak memory, decided verdicts, unstable ranges and their mechanisms, and two sample
     speeds checked against a lattice two orders finer (near their leading exponents).
+(d) A run-up across an unstable range: the gearbox variant of
+    ``tests/stability/gear_variants.py`` (72 DOFs, a principal parametric resonance of its
+    polymer second mesh at 3439-3877 rpm) every 25 rpm from 3200 to 4100 rpm as a sweep does
+    it (each solve from the previous solution, each verdict continued from the previous one):
+    CPU seconds of the verdict against the solve per speed, inside / near (within 100 rpm of
+    an edge) / far from the range; then the map's bounds from samples every 100 rpm against
+    the monodromy reference (``tests/stability/data/gear_variant_ranges.json``).
+(e) The Campbell diagram of the embedded gearbox at 250:6000:250 rpm with and without its
+    stability map (CPU seconds).
 
 Every measurement runs in its own subprocess (peak RSS from ``/proc``, see ``_memory.py``).
 
 Usage::
 
     OPENBLAS_NUM_THREADS=1 python bench/stability.py [--speeds 50]
-        [--out bench/results/stability.md]
+        [--sections verdict,orders,map,runup,campbell] [--out bench/results/stability.md]
+
+Times in (d) and (e) are CPU seconds of the process (``time.process_time``): the machine the
+figures come from was shared, and wall time measured the other processes too.
 
 Design notes
 ------------
@@ -211,6 +223,93 @@ def _map(count: int) -> dict:
     }
 
 
+def _variant():  # type: ignore[no-untyped-def]
+    sys.path.insert(0, str(HERE.parent / "tests" / "stability"))
+    from gear_variants import reference_ranges, variant_document, variant_model
+
+    return variant_model(), variant_document()["harmonics"], reference_ranges()
+
+
+def _runup(step: float) -> dict:
+    import rheolin as rl
+    from rheolin.floquet import Continuation
+    from rheolin.results.compute import solve_point
+    from rheolin.stability import stability_map
+    from rheolin.study.run import MAP_PRECISION
+
+    model, harm, ref = _variant()
+    edges = ref["ranges"]["principal"]
+    lo, hi = edges["lower_rpm"], edges["upper_rpm"]
+    opts = {"order": harm["order"], "max_order": harm["max_order"], "stability": False}
+    solve_point(model, 3000 * RPM, **opts)  # warm-up
+    cont = Continuation()
+    previous = None
+    rows = []
+    for rpm in np.arange(3200.0, 4100.0 + step / 2, step):
+        c = time.process_time()
+        p = solve_point(model, rpm * RPM, x0=previous, **opts)
+        solve = time.process_time() - c
+        previous = p.solution if p.solution.success else None
+        c = time.process_time()
+        res = rl.floquet(p.assembled.system, continuation=cont)
+        verdict = time.process_time() - c
+        where = (
+            "inside"
+            if lo < rpm < hi
+            else ("near" if min(abs(rpm - lo), abs(rpm - hi)) <= 100 else "far")
+        )
+        rows.append(
+            {
+                "rpm": float(rpm),
+                "solve": solve,
+                "verdict": verdict,
+                "where": where,
+                "decided": bool(res.decided),
+                "stable": bool(res.stable),
+                "max_real": float(res.max_real),
+                "uncertainty": float(res.max_real_uncertainty),
+                "order": res.lattice.order if res.lattice is not None else None,
+                "accuracy": res.info.get("accuracy", {}).get("orders"),
+            }
+        )
+    samples = np.arange(3300.0, 4000.0 + 1.0, 100.0)
+    c = time.process_time()
+    smap = stability_map(model, samples * RPM, refine=MAP_PRECISION, rtol=np.inf)
+    map_cpu = time.process_time() - c
+    (r,) = smap.ranges
+    return {
+        "rows": rows,
+        "map_cpu": map_cpu,
+        "map_evaluations": smap.info.get("evaluations"),
+        "bounds": {
+            "lower": [r.lower / RPM, r.lower_uncertainty / RPM, lo, edges["lower_uncertainty_rpm"]],
+            "upper": [r.upper / RPM, r.upper_uncertainty / RPM, hi, edges["upper_uncertainty_rpm"]],
+        },
+        "states": smap.state.tolist(),
+    }
+
+
+def _campbell(step: float) -> dict:
+    from rheolin.stability import campbell, stability_map
+    from rheolin.study.run import MAP_PRECISION
+
+    model = _model()
+    speeds = np.arange(step, 6000.0 + step / 2, step) * RPM
+    c = time.process_time()
+    campbell(model, speeds)
+    alone = time.process_time() - c
+    c = time.process_time()
+    smap = stability_map(model, speeds, refine=MAP_PRECISION)
+    check = time.process_time() - c
+    return {
+        "speeds": int(speeds.size),
+        "campbell": alone,
+        "check": check,
+        "decided": int(np.sum(smap.decided)),
+        "ranges": len(smap.ranges),
+    }
+
+
 def _run(args: list[str]) -> dict:
     out = subprocess.run(
         [sys.executable, __file__, *args], capture_output=True, text=True, check=True
@@ -222,23 +321,46 @@ def _run(args: list[str]) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--speeds", type=int, default=50)
+    ap.add_argument("--sections", default="verdict,orders,map,runup,campbell")
     ap.add_argument("--out", type=Path, default=None)
     ap.add_argument("--worker", nargs="*", default=None, help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.worker:
         kind, value = a.worker[0], a.worker[1]
-        fn = {"verdict": _verdict, "orders": _orders, "map": _map}[kind]
+        workers = {
+            "verdict": _verdict,
+            "orders": _orders,
+            "map": _map,
+            "runup": _runup,
+            "campbell": _campbell,
+        }
         arg = int(value) if kind == "map" else float(value)
-        print(json.dumps(fn(arg)))
+        print(json.dumps(workers[kind](arg)))
         return
-    v = _run(["--worker", "verdict", "3000"])
-    o = _run(["--worker", "orders", "3000"])
-    m = _run(["--worker", "map", str(a.speeds)])
+    sections = a.sections.split(",")
     lines = [
         "# Floquet stability of the embedded gearbox (bench/stability.py)",
         "",
         "2 cores, BLAS on one thread, each measurement in its own process.",
         "",
+    ]
+    if "verdict" in sections and "orders" in sections:
+        lines += _first(_run(["--worker", "verdict", "3000"]), _run(["--worker", "orders", "3000"]))
+    if "map" in sections:
+        lines += _map_lines(_run(["--worker", "map", str(a.speeds)]))
+    if "runup" in sections:
+        lines += _runup_lines(_run(["--worker", "runup", "25"]))
+    if "campbell" in sections:
+        lines += _campbell_lines(_run(["--worker", "campbell", "250"]))
+    text = "\n".join(lines) + "\n"
+    print(text)
+    if a.out:
+        a.out.parent.mkdir(parents=True, exist_ok=True)
+        a.out.write_text(text)
+
+
+def _first(v: dict, o: dict) -> list[str]:
+    lines = [
         "## One verdict at 3000 rpm",
         "",
         "| | value |",
@@ -272,8 +394,12 @@ def main() -> None:
             f"{r['truncation']:.2e} | {dec} | {r['seconds']:.1f} |"
         )
         prev = r["max_real"]
+    return lines
+
+
+def _map_lines(m: dict) -> list[str]:
     per = np.array(m["per_speed"])
-    lines += [
+    lines = [
         "",
         f"## Stability map, {m['speeds']} speeds over 1500-4500 rpm",
         "",
@@ -297,11 +423,63 @@ def main() -> None:
             f"| {c['rpm']:.0f} | {c['order']} | {c['max_real']:.10g} | {c['fine_max_real']:.10g}"
             f" | {c['diff']:.2e} | {c['estimate']:.2e} |"
         )
-    text = "\n".join(lines) + "\n"
-    print(text)
-    if a.out:
-        a.out.parent.mkdir(parents=True, exist_ok=True)
-        a.out.write_text(text)
+    return lines
+
+
+def _runup_lines(u: dict) -> list[str]:
+    rows = u["rows"]
+    lines = [
+        "",
+        "## Run-up across an unstable range (gear variant, 72 DOFs, 3200-4100 rpm every 25 rpm)",
+        "",
+        "Principal parametric resonance of the polymer second mesh, unstable 3439.46-3877.13 rpm "
+        "(monodromy matrix). Per speed, CPU seconds; the verdict continued from the previous "
+        "speed as in a sweep, the solve from the previous solution.",
+        "",
+        "| where | speeds | solve [s] median | verdict [s] median / max | verdict / solve max | "
+        "decided |",
+        "|---|---|---|---|---|---|",
+    ]
+    for where in ("far", "near", "inside"):
+        sel = [r for r in rows if r["where"] == where]
+        if not sel:
+            continue
+        solve = np.array([r["solve"] for r in sel])
+        verdict = np.array([r["verdict"] for r in sel])
+        ratio = verdict / solve
+        lines.append(
+            f"| {where} | {len(sel)} | {np.median(solve):.2f} | {np.median(verdict):.2f} / "
+            f"{verdict.max():.2f} | {ratio.max():.1f}x | "
+            f"{sum(r['decided'] for r in sel)} of {len(sel)} |"
+        )
+    lines += [
+        "",
+        f"Map from samples every 100 rpm (3300-4000 rpm), bounds refined to 1e-5 by decided "
+        f"verdicts: {u['map_cpu']:.1f} CPU s, {u['map_evaluations']} Floquet evaluations "
+        "for the two edges.",
+        "",
+        "| edge | map [rpm] | stated uncertainty [rpm] | monodromy [rpm] | error | relative |",
+        "|---|---|---|---|---|---|",
+    ]
+    for side in ("lower", "upper"):
+        got, unc, ref, ref_unc = u["bounds"][side]
+        lines.append(
+            f"| {side} | {got:.6f} | {unc:.2g} | {ref:.6f} (+-{ref_unc:.1g}) | "
+            f"{got - ref:+.2g} | {abs(got - ref) / ref:.1e} |"
+        )
+    return lines
+
+
+def _campbell_lines(c: dict) -> list[str]:
+    return [
+        "",
+        f"## Campbell diagram with its stability check ({c['speeds']} speeds, 250:6000:250 rpm)",
+        "",
+        f"Campbell diagram alone {c['campbell']:.1f} CPU s; its stability map "
+        f"{c['check']:.1f} CPU s: the check costs **{c['check'] / c['campbell']:.1f}x** the "
+        f"diagram; {c['decided']} of {c['speeds']} verdicts decided, {c['ranges']} unstable "
+        "ranges.",
+    ]
 
 
 if __name__ == "__main__":

@@ -143,3 +143,29 @@ def test_study_plot_has_no_empty_panel(tmp_path):
         assert len([a for a in fig.axes if a.get_label() != "<colorbar>"]) == panels
         if panels == 1:
             assert "no unstable range" in fig.axes[0].get_title()
+
+
+def test_campbell_hatches_undecided_speeds_and_does_not_call_them_stable():
+    """A map with one undecided speed: hatched in both panels and counted in the title,
+    which must not say "stable at every speed" (a decided map of the same speeds does)."""
+    from rheolin.stability.stability_map import StabilityMap
+
+    r = campbell(overhung(), np.linspace(0, 1500, 7))
+    n = r.speeds.size
+
+    def smap(decided: np.ndarray) -> StabilityMap:
+        ones = np.ones(n, dtype=bool)
+        state = np.where(decided, "stable", "undecided")
+        return StabilityMap(r.speeds, -np.ones(n), np.full(n, 1e-6), state == "stable", ~ones,
+                            ones, np.zeros(n), decided=decided, state=state)  # fmt: skip
+
+    some = np.ones(n, dtype=bool)
+    some[3] = False
+    fig = campbell_figure(r, stability=smap(some))
+    assert problems(fig) == []
+    title = fig.axes[0].get_title()
+    assert "1 speed(s) undecided" in title and "stable at every speed" not in title
+    hatched = [p for ax in fig.axes[:2] for p in ax.patches if p.get_hatch() == "///"]
+    assert len(hatched) == 2
+    clean = campbell_figure(r, stability=smap(np.ones(n, dtype=bool)))
+    assert "stable at every speed" in clean.axes[0].get_title()

@@ -13,11 +13,13 @@ from rich.table import Table
 
 from .. import __version__
 from .common import (
+    FLOQUET_RTOL,
     MODEL,
     OUT,
     STABILITY,
     console,
     fail,
+    floquet_rtol,
     load,
     output_dir,
     preflight,
@@ -42,6 +44,7 @@ def campbell(
     out: Path = OUT,
     fmax: float = typer.Option(None, help="Plot up to this frequency [Hz] (default: auto)."),
     stability: str = STABILITY,
+    floquet_accuracy: float = FLOQUET_RTOL,
     report: bool = typer.Option(False, "--report", help="Also write DIR/report.html."),
 ) -> None:
     """Campbell diagram: DIR/campbell.nc and DIR/campbell.png, critical speeds printed;
@@ -54,6 +57,7 @@ def campbell(
     w = parse_speeds(speeds, allow_zero=True)  # 0: the modes at standstill
     spinning = w[w > 0]  # what the preflight and the Floquet map look at
     flag = stability_flag(stability)
+    accuracy = floquet_rtol(floquet_accuracy)
     if fmax is not None and not (np.isfinite(fmax) and fmax > 0):
         raise fail(f"--fmax: must be a frequency > 0 in Hz, got {fmax}")
     out_dir = output_dir(out, f"{model.stem}_campbell")
@@ -67,7 +71,9 @@ def campbell(
         with counted("Campbell diagram", w.size, "speeds") as step:
             result = campbell_fn(lm.model, w, progress=step)
         smap, why = (
-            _stability_map(lm.model, spinning, flag) if spinning.size else (None, "standstill only")
+            _stability_map(lm.model, spinning, flag, accuracy)
+            if spinning.size
+            else (None, "standstill only")
         )
     with sigterm_as_interrupt(), staged_output(out_dir, CAMPBELL_FILES) as stage:
         ds = result.to_dataset()
@@ -103,30 +109,39 @@ def campbell(
     code = 0
     if smap is None:
         console.print(f"[yellow]stability: not checked[/yellow] ({escape(why)})")
-    elif not smap.ranges:
-        undecided = int((~np.asarray(smap.decided, bool)).sum())
-        if undecided:
-            console.print(
-                "stability (Floquet, full periodic system): [yellow]no unstable speed found, "
-                f"but {undecided} of {len(smap.speeds)} speeds are UNDECIDED[/yellow] (the "
-                "truncation could still flip their verdict; docs/stability.md)"
-            )
-        else:
+    else:
+        late = np.asarray(smap.speeds)[np.asarray(smap.undecided, bool)] * 30 / np.pi
+        if not smap.ranges and not late.size:
             console.print(
                 "stability (Floquet, full periodic system): [green]stable at every speed[/green]"
             )
-    else:
-        code = EXIT_FAILED
         for r in smap.ranges:
             console.print(
-                f"[red]unstable[/red] {r.lower * 30 / np.pi:.1f}..{r.upper * 30 / np.pi:.1f} rpm: "
-                f"{escape(r.label)}"
+                f"[red]unstable[/red] {_bound(r.lower, r.lower_uncertainty)}.."
+                f"{_bound(r.upper, r.upper_uncertainty)} rpm: {escape(r.label)}"
             )
+        if late.size:  # neither stable nor unstable: exit 1 as for an unstable range
+            shown = ", ".join(f"{x:.6g}" for x in late)
+            console.print(
+                f"stability: [yellow]{late.size} speed{'s' if late.size > 1 else ''} undecided: "
+                f"{shown} rpm[/yellow] (the Floquet truncation could still flip their verdict; "
+                "docs/stability.md)"
+            )
+        if smap.ranges or late.size:
+            code = EXIT_FAILED
     console.print("wrote " + ", ".join(str(p) for p in written), markup=False)
     raise typer.Exit(code)
 
 
-def _stability_map(model: Any, speeds: np.ndarray, flag: bool | None) -> tuple[Any, str]:
+def _bound(w: float, unc: float) -> str:
+    """A range bound [rad/s] in rpm, with its uncertainty when it is finite."""
+    rpm = w * 30 / np.pi
+    return f"{rpm:.1f}" if not np.isfinite(unc) else f"{rpm:.2f} (+-{unc * 30 / np.pi:.2g})"
+
+
+def _stability_map(
+    model: Any, speeds: np.ndarray, flag: bool | None, accuracy: float | None = None
+) -> tuple[Any, str]:
     """The stability map over the Campbell speeds (None and why when it is not computed)."""
     if flag is False:
         return None, "--stability off"
@@ -145,7 +160,13 @@ def _stability_map(model: Any, speeds: np.ndarray, flag: bool | None) -> tuple[A
 
     with counted("Floquet stability", len(speeds), "speeds") as step:
         try:
-            smap = map_fn(model, speeds, refine=MAP_PRECISION, progress=lambda i, r: step(i + 1))
+            smap = map_fn(
+                model,
+                speeds,
+                refine=MAP_PRECISION,
+                progress=lambda i, r: step(i + 1),
+                rtol=accuracy,
+            )
         except FreeBodyError as exc:  # a free body has modes, but no operating point
             if flag:
                 raise

@@ -64,6 +64,19 @@ RTOL = typer.Option(
     help="Convergence criterion: backward error ||f - A q|| / (||A|| ||q|| + ||f||) "
     "(docs/solvers.md), in (0, 0.1).",
 )
+FLOQUET_RTOL = typer.Option(
+    None,
+    "--floquet-rtol",
+    help="Relative accuracy of the largest Floquet real part (default: 1e-4 for run, not "
+    "refined beyond the verdict's own for sweep and campbell; docs/stability.md).",
+)
+
+
+def floquet_rtol(value: float | None) -> float | None:
+    """``--floquet-rtol`` checked: a number > 0 (None: the default)."""
+    if value is not None and not (np.isfinite(value) and value > 0):
+        raise fail(f"--floquet-rtol: must be a number > 0, got {value}")
+    return value
 
 
 def fail(message: str) -> UserError:

@@ -11,6 +11,7 @@ from pathlib import Path
 import typer
 
 from .common import (
+    FLOQUET_RTOL,
     HARMONICS,
     MAX_ORDER,
     METHOD,
@@ -21,6 +22,7 @@ from .common import (
     Notes,
     console,
     fail,
+    floquet_rtol,
     load,
     output_dir,
     preflight,
@@ -54,6 +56,7 @@ def run(
     max_order: float = MAX_ORDER,
     stability: str = STABILITY,
     rtol: float = RTOL,
+    floquet_accuracy: float = FLOQUET_RTOL,
     nodes: str = typer.Option(None, help="Orbit/spectrum nodes, e.g. input:3,output:6."),
     plots: bool = typer.Option(True, help="Write PNG plots."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
@@ -66,6 +69,11 @@ def run(
 
     lm = load(model)
     opts = solve_options(lm, method, harmonics, max_order, stability, rtol)
+    accuracy = floquet_rtol(floquet_accuracy)
+    if accuracy is not None:  # the continuation carries it to the verdict
+        from ..floquet import Continuation
+
+        opts["continuation"] = Continuation(rtol=accuracy)
     w = parse_speed(speed) if speed is not None else lm.spec.model.speed
     if w is None:
         raise fail("--speed: required (the model file has no model.speed); e.g. --speed 3000rpm")

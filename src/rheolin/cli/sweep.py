@@ -23,6 +23,7 @@ from rich.progress import (
 )
 
 from .common import (
+    FLOQUET_RTOL,
     HARMONICS,
     MAX_ORDER,
     METHOD,
@@ -32,6 +33,7 @@ from .common import (
     STABILITY,
     console,
     fail,
+    floquet_rtol,
     load,
     output_dir,
     preflight,
@@ -70,6 +72,7 @@ def sweep(
     max_order: float = MAX_ORDER,
     stability: str = STABILITY,
     rtol: float = RTOL,
+    floquet_accuracy: float = FLOQUET_RTOL,
     stability_map: bool = typer.Option(
         True, help="Also compute the Floquet stability map (stability_map.nc/.png, ranges refined)."
     ),
@@ -122,6 +125,7 @@ def sweep(
         "order": harmonics,  # None: the file's [harmonics] at every grid point
         "max_order": max_order,
         "stability_map": stability_map,
+        "floquet_rtol": floquet_rtol(floquet_accuracy),
     }
     show_operating_point(lm.model, float(w[0]), "the first speed, the file's parameters")
     run = dict(out=out_dir, overwrite=overwrite, workers=workers, chunk_size=chunk_size)
@@ -191,8 +195,11 @@ def run_sweep(
     except ModelError as exc:  # another study in the directory, a busy directory, --scheduler
         return refuse(str(exc))
     print_study_summary(console, err, result)
+    # exit 1: a point not converged, an unstable range, or an undecided verdict (its
+    # stability could go either way: not a pass); docs/cli.md
     converged = bool((result.dataset["success"] == 1).all())
-    return 0 if converged and not map_counts(result)["ranges"] else EXIT_FAILED
+    clean = converged and not map_counts(result)["ranges"] and not undecided_points(result)
+    return 0 if clean else EXIT_FAILED
 
 
 @contextlib.contextmanager
@@ -267,7 +274,11 @@ class StudyBar:
             self.lines.update(event.done)
 
     def where(self, point: int) -> str:
-        spec = self.spec
+        return self.where_point(self.spec, point)
+
+    @staticmethod
+    def where_point(spec: Any, point: int) -> str:
+        """``"900 rpm"`` (with the parameter values of a study) for a point."""
         rpm = float(spec.speeds[spec.speed_of(point)]) * RPM
         extra = spec.describe(spec.combo_of(point))
         return f"{rpm:.6g} rpm" + (f", {extra}" if extra else "")
@@ -279,13 +290,29 @@ def map_counts(result: Any) -> dict[str, int]:
     out = dict(speeds=0, unstable=0, undecided=0, unconverged=0, ranges=0)
     for smap in result.maps.values():
         n = int(np.size(smap.speeds))
-        decided = np.asarray(smap.decided, bool) if np.size(smap.decided) == n else np.ones(n, bool)
+        undecided = np.asarray(smap.undecided, bool)
         out["speeds"] += n
-        out["unstable"] += int((~np.asarray(smap.stable, bool)).sum())
-        out["undecided"] += int((~decided).sum())
+        out["unstable"] += int((~np.asarray(smap.stable, bool) & ~undecided).sum())
+        out["undecided"] += int(undecided.sum())
         out["unconverged"] += int((~np.asarray(smap.converged, bool)).sum())
         out["ranges"] += len(smap.ranges)
     return out
+
+
+def undecided_points(result: Any) -> list[str]:
+    """Where the verdict is undecided: each point flagged so (``stable = -2``), or, with the
+    stability check off, each speed of a map whose verdict is; as ``"900 rpm"`` (with the
+    parameter values of a study)."""
+    spec = result.spec
+    flags = np.asarray(result.dataset["stable"].values).reshape(-1)
+    where = [StudyBar.where_point(spec, int(p)) for p in np.flatnonzero(flags == -2)]
+    if where or not (flags == -1).any():
+        return where
+    for combo, smap in sorted(result.maps.items()):
+        extra = spec.describe(combo)
+        for w in np.asarray(smap.speeds)[np.asarray(smap.undecided, bool)]:
+            where.append(f"{float(w) * RPM:.6g} rpm" + (f", {extra}" if extra else ""))
+    return where
 
 
 def print_study_summary(console: Console, err: Console, result: Any) -> None:
@@ -295,7 +322,8 @@ def print_study_summary(console: Console, err: Console, result: Any) -> None:
     failed = int((ds["status"] < 0).sum())
     unsuccessful = int((ds["success"] == 0).sum())
     unstable = int((ds["stable"] == 0).sum())
-    unchecked = int((ds["stable"] < 0).sum())
+    undecided = int((ds["stable"] == -2).sum())
+    unchecked = int((ds["stable"] == -1).sum())
     grid = " x ".join(str(len(p.values)) for p in spec.parameters)
     size = f"{spec.speeds.size} speeds" + (f" x {grid} parameter values" if grid else "")
     ranges = []
@@ -313,7 +341,7 @@ def print_study_summary(console: Console, err: Console, result: Any) -> None:
             f"{counts['undecided']} undecided of {counts['speeds']} speeds"
         )
     else:
-        verdict = f"stability: {unstable} unstable, {unchecked} not checked"
+        verdict = f"stability: {unstable} unstable, {undecided} undecided, {unchecked} not checked"
     console.print(
         f"{size} = {n} points ({result.resumed} from the checkpoint, {result.computed} "
         f"computed now): {n - unsuccessful} converged, {unsuccessful} not successful"
@@ -322,6 +350,18 @@ def print_study_summary(console: Console, err: Console, result: Any) -> None:
         highlight=False,
         soft_wrap=True,
     )
+    late = undecided_points(result)
+    if late:
+        more = f" and {len(late) - 12} more" if len(late) > 12 else ""
+        shown = _one_unit(", ".join(late[:12])) + more
+        console.print(
+            f"{len(late)} speed{'s' if len(late) > 1 else ''} undecided: {shown} (the Floquet "
+            "truncation could still flip their verdicts; sweep.json `stability`, "
+            "docs/stability.md)",
+            markup=False,
+            highlight=False,
+            soft_wrap=True,
+        )
     if result.maps:
         console.print(
             "stability map unstable ranges (rpm): " + ("; ".join(ranges) or "none"), markup=False
@@ -368,3 +408,11 @@ def print_study_summary(console: Console, err: Console, result: Any) -> None:
 def register(app: typer.Typer) -> None:
     """Add ``sweep`` to the ``rheolin`` application."""
     app.command("sweep")(sweep)
+
+
+def _one_unit(text: str) -> str:
+    """``"900 rpm, 1200 rpm"`` -> ``"900, 1200 rpm"`` when no parameter values intervene."""
+    parts = text.split(", ")
+    if all(p.endswith(" rpm") for p in parts) and len(parts) > 1:
+        return ", ".join(p[: -len(" rpm")] for p in parts[:-1]) + ", " + parts[-1]
+    return text

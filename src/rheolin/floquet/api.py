@@ -13,15 +13,17 @@ import numpy as np
 
 from ..budget import MemoryBudgetError, format_bytes
 from ..budget import memory_budget as resolve_budget
-from ..harmonics.lattice import Lattice, harmonic_lattice, system_lattice
+from ..harmonics.lattice import Lattice, system_lattice
 from ..harmonics.sets import HarmonicSet, as_harmonic_set
 from ..system.periodic import PeriodicSystem
 from ..system.rigid_modes import held_rigid_modes as find_rigid_modes
 from . import large
+from .accuracy import DEFAULT_RTOL, leading_uncertainty, next_lattice, refine_leading
 from .band import BandAveraged, band_memory
 from .confirm import confirm_unresolved
 from .continuation import Continuation
 from .dense import floquet_dense
+from .resonance import floquet_lattice
 from .result import FloquetResult, floquet_result
 from .search import lattice_exponents, lattice_memory
 from .sparse import floquet_sparse
@@ -99,6 +101,7 @@ def floquet(
     near: Any = None,
     continuation: Continuation | None = None,
     band: int | None = None,
+    rtol: float | None = None,
 ) -> FloquetResult:
     """Floquet exponents by Hill's method.
 
@@ -157,6 +160,16 @@ def floquet(
         Lattice method: search from this many time-averaged modes nearest 0, computed
         sparsely, with certificates for the modes left out (docs/stability.md, section 8).
         ``None``: every mode densely up to ``2 n = 4000``, a band above (``info["band"]``).
+    rtol
+        Lattice method: the relative accuracy of ``max_real`` (its stated uncertainty
+        ``max_real_uncertainty`` at most ``rtol |max_real|``, or ``rtol`` times a damping
+        ratio of 0.1 % of the exponent near zero; ``inf``: none): the leading exponent's
+        cluster is searched again on finer lattices, near it only, until it is met (at most
+        :data:`~rheolin.floquet.accuracy.RTOL_ORDERS` orders up, within the memory budget;
+        ``info["accuracy"]`` says what was done). Default: ``DEFAULT_RTOL`` (1e-4) with the
+        automatic truncation; over a sweep (a ``continuation``) the continuation's ``rtol``,
+        else none (a run-up needs verdicts, and refining costs 3-5 times the verdict near
+        a resonance: bench/stability.py); none with a given ``order`` or lattice.
 
     Examples
     --------
@@ -192,9 +205,15 @@ def floquet(
         system = system.constraint.reduce(system)
     rigid = find_rigid_modes(system)
     held = system if rigid is None else rigid.reduce(system)
+    if rtol is not None and not rtol > 0:
+        raise ValueError(f"`rtol` must be a positive number (inf: no refinement), got {rtol!r}")
+    if rtol is None and continuation is not None:  # over a sweep: refined only on demand
+        rtol = continuation.rtol if continuation.rtol is not None else float("inf")
+    if rtol is None and order is None and harmonics is None:
+        rtol = DEFAULT_RTOL
     res = _floquet(
         held, harmonics, method, order, frequencies, k, max_shifts, memory_budget, near,
-        continuation=continuation, band=band,
+        continuation=continuation, band=band, rtol=rtol,
     )  # fmt: skip
     if rotated and "band" in res.info:
         res.info["band"]["frames"] = rotated
@@ -218,6 +237,7 @@ def _floquet(
     *,
     continuation: Continuation | None = None,
     band: int | None = None,
+    rtol: float | None = None,
 ) -> FloquetResult:
     """:func:`floquet` on a system without rigid-body modes (checked by the caller)."""
     budget = memory_budget
@@ -229,7 +249,13 @@ def _floquet(
             )
         modes = large.certified_band(system, band, budget, harmonics.order) if banded else None
         return _floquet_lattice(
-            system, harmonics, budget=budget, near=near, continuation=continuation, modes=modes
+            system,
+            harmonics,
+            budget=budget,
+            near=near,
+            continuation=continuation,
+            modes=modes,
+            rtol=rtol,
         )
     if banded and method in ("auto", "lattice") and harmonics is None:
         return _lattice_auto(
@@ -240,6 +266,7 @@ def _floquet(
             near=near,
             continuation=continuation,
             band=band,
+            rtol=rtol,
         )
     if near is not None and method != "lattice":
         raise ValueError("`near` needs method='lattice'")
@@ -256,6 +283,7 @@ def _floquet(
             refine=order is None and near is None,
             near=near,
             continuation=continuation,
+            rtol=rtol,
         )
     if harmonics is None:
         if system.time_invariant:
@@ -266,7 +294,12 @@ def _floquet(
                 and 2 * system.n * (2 * _dense_order(system) + 1) > AUTO_DENSE_LIMIT
             ):
                 return _lattice_auto(
-                    system, order, budget, refine=order is None, continuation=continuation
+                    system,
+                    order,
+                    budget,
+                    refine=order is None,
+                    continuation=continuation,
+                    rtol=rtol,
                 )
             hset = dense_stability_harmonics(system)
     else:
@@ -280,7 +313,7 @@ def _floquet(
         # the dense grid could not decide (a truncation that has not converged near the
         # axis): the lattice raises its order where the exponents need it
         try:
-            lat = _lattice_auto(system, None, budget, refine=True)
+            lat = _lattice_auto(system, None, budget, refine=True, rtol=rtol)
         except MemoryBudgetError:
             return res
         if lat.decided:
@@ -373,22 +406,26 @@ def _lattice_auto(
     near: Any = None,
     continuation: Continuation | None = None,
     band: int | None = None,
+    rtol: float | None = None,
 ) -> FloquetResult:
     """Lattice method at ``order`` (default: the coarsest, raised one order at a time up to
     :data:`MAX_AUTO_ORDER` while undecided and the larger lattice fits the budget; where it
-    does not, the undecided coarse verdict says so). A large model (or ``band``) starts from
-    the band of time-averaged modes, built once for every order."""
+    does not, the undecided coarse verdict says so). The lattices see resonances
+    (:func:`~rheolin.floquet.resonance.floquet_lattice`). A large model (or ``band``) starts
+    from the band of time-averaged modes, built once for every order."""
     limit = resolve_budget(budget)
     p = DEFAULT_LATTICE_ORDER if order is None else int(order)
+    top = max(MAX_AUTO_ORDER, DEFAULT_LATTICE_ORDER)
     modes = large.certified_band(system, band, budget, p) if large.uses_band(system, band) else None
-    lat = system_lattice(system, p, max_size=10**6)
+    lat = floquet_lattice(system, p, max_size=10**6)
     res = _floquet_lattice(
-        system, lat, budget=budget, near=near, continuation=continuation, modes=modes
-    )
+        system, lat, budget=budget, near=near, continuation=continuation, modes=modes,
+        rtol=rtol, last=not refine or p >= top,
+    )  # fmt: skip
     tried: list[int] = []
     seconds = float(res.info["seconds"])
-    while refine and not res.decided and p < max(MAX_AUTO_ORDER, DEFAULT_LATTICE_ORDER):
-        finer = system_lattice(system, p + 1, max_size=10**6)
+    while refine and not res.decided and p < top:
+        finer = floquet_lattice(system, p + 1, max_size=10**6)
         if lattice_memory(system, finer) > limit:
             more = f"undecided at lattice order {p}; order {p + 1} would exceed the memory budget"
             res.info["note"] = more
@@ -396,7 +433,10 @@ def _lattice_auto(
         log.info("floquet: order %d undecided; refining to order %d", p, p + 1)
         tried.append(p)
         p += 1
-        res = _floquet_lattice(system, finer, budget=budget, continuation=continuation, modes=modes)
+        res = _floquet_lattice(
+            system, finer, budget=budget, continuation=continuation, modes=modes, rtol=rtol,
+            last=p >= top,
+        )  # fmt: skip
         seconds += float(res.info["seconds"])
         res.info["refined_from"] = list(tried)
         res.info["seconds"] = seconds
@@ -411,7 +451,12 @@ def _floquet_lattice(
     near: Any = None,
     continuation: Continuation | None = None,
     modes: Any = None,
+    rtol: float | None = None,
+    last: bool = True,
 ) -> FloquetResult:
+    """The lattice verdict on ``lattice`` (its unresolved exponents confirmed on finer ones);
+    with ``rtol``, the leading exponent refined when the verdict is decided or ``last`` (no
+    finer order follows)."""
     t0 = time.perf_counter()
     est = lattice_memory(system, lattice)
     if isinstance(modes, BandAveraged):
@@ -444,7 +489,7 @@ def _floquet_lattice(
         steps: list[Any] = []
         used = est  # the largest lattice's estimate: what the verdict needed
         while near is None and np.any(out.unresolved & ~out.certified) and len(steps) < 2:
-            finer = _finer(system, finer) if finer is not None else None
+            finer = next_lattice(finer) if finer is not None else None
             if finer is None:
                 break
             est_finer = lattice_memory(system, finer)
@@ -468,9 +513,27 @@ def _floquet_lattice(
         if out.settle is not None:
             out.settle(out, np.flatnonzero(np.isnan(out.truncation)))
             out.settle = None  # it holds the lattice's operators
-    w = system.omega
-    out.exponents = large.inertial_exponents(system, modes, out.exponents, out.dominant)
-    res = floquet_result(out.exponents, out.bounds, out.edge, w, "lattice", info=out.info)
+        res = _lattice_result(system, out, lattice, near, used, t0, modes)
+        if rtol is not None and near is None and (last or res.decided):
+            out, accuracy = refine_leading(system, out, lattice, rtol, budget, continuation)
+            res = _lattice_result(system, out, lattice, near, used, t0, modes)
+            res.info["accuracy"] = accuracy
+    return res
+
+
+def _lattice_result(
+    system: PeriodicSystem,
+    out: Any,
+    lattice: Lattice,
+    near: Any,
+    used: int,
+    t0: float,
+    modes: Any = None,
+) -> FloquetResult:
+    """The :class:`FloquetResult` of a lattice search ``out`` (a band's bodies written in
+    their own frames reported at their inertial frequencies)."""
+    exponents = large.inertial_exponents(system, modes, out.exponents, out.dominant)
+    res = floquet_result(exponents, out.bounds, out.edge, system.omega, "lattice", info=out.info)
     order = np.argsort(-out.exponents.real, kind="stable")
     res.truncation = out.truncation[order]
     res.info["order"] = out.order[order]
@@ -494,18 +557,9 @@ def _floquet_lattice(
     res.info["liouville"] = out.liouville
     if isinstance(modes, BandAveraged):
         res.info["band"] = large.band_info(modes, [])
+    if order.size:
+        res.max_real_uncertainty = leading_uncertainty(out, int(order[0]))
     return res
-
-
-def _finer(system: PeriodicSystem, lattice: Lattice) -> Lattice | None:
-    """The lattice of the next order with the same steps (None past ``max_size``)."""
-    steps = dict(zip(lattice.generators, lattice.costs, strict=True))
-    if not steps:
-        return None
-    try:
-        return harmonic_lattice(steps, lattice.order + 1, max_size=10**6)
-    except ValueError:
-        return None
 
 
 class _single_thread_blas:

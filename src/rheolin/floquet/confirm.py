@@ -20,8 +20,10 @@ def confirm_unresolved(
     out: LatticeExponents,
     finer: Lattice,
     previous: LatticeExponents | None = None,
+    todo: np.ndarray | None = None,
 ) -> tuple[LatticeExponents, LatticeExponents | None]:
-    """Settle the unresolved, uncertified representatives on a finer lattice.
+    """Settle the unresolved, uncertified representatives (or the rows ``todo``) on a finer
+    lattice.
 
     Their clusters are searched again on ``finer`` (only near them), each from its coarse
     eigenvectors, shifted to its coarse exponents: the continuation converges in a few
@@ -37,8 +39,12 @@ def confirm_unresolved(
     (:class:`~rheolin.floquet.Continuation`); the clusters it covers start from its
     eigenvectors (a few Arnoldi steps), the others from the coarse ones. Returns ``out`` and
     the finer search (None: nothing to settle), which the next speed can start from.
+
+    ``todo``: a mask of rows to search again instead (:func:`~rheolin.floquet.accuracy.
+    refine_leading`: the leading exponent's cluster, resolved, for its accuracy).
     """
-    todo = out.unresolved & ~out.certified
+    if todo is None:
+        todo = out.unresolved & ~out.certified
     if not todo.any():
         out.info["confirmed"] = {"order": finer.order, "clusters": 0, "replaced": 0, "confirmed": 0}
         return out, None

@@ -77,11 +77,15 @@ class Continuation:
     """The lattice eigenvectors of the last :func:`~rheolin.floquet` call, per lattice.
 
     Holds one :class:`~rheolin.floquet.LatticeExponents` per lattice order seen (their
-    eigenvectors: a few MB for a gearbox); :meth:`clear` forgets them.
+    eigenvectors: a few MB for a gearbox); :meth:`clear` forgets them. ``rtol``: the accuracy
+    of the largest real part the calls that share it ask for (:func:`rheolin.floquet`'s
+    ``rtol`` when a call gives none; None: no refinement), so that a sweep's settings reach
+    every verdict.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, rtol: float | None = None) -> None:
         self._kept: dict[tuple[int, int], tuple[np.ndarray, LatticeExponents]] = {}
+        self.rtol = rtol
 
     def start(self, n: int, lattice: Lattice) -> LatticeExponents | None:
         """The kept search on ``lattice`` for a system of ``n`` DOFs (None: none)."""

@@ -113,6 +113,13 @@ class FloquetResult:
         Lattice method: the exponents of the time-averaged system.
     averaged_tol
         Lattice method: their tolerances (as ``tolerances``).
+    max_real_uncertainty
+        Stated uncertainty of ``max_real`` [1/s]. Lattice method: ``TRUNCATION_SAFETY``
+        times the leading exponent's truncation estimate (its Gershgorin radius when its
+        disc judges it), at least its tolerance; ``rtol`` of :func:`rheolin.floquet` refines
+        the lattice near it until this meets ``rtol |max_real|``. Dense and sparse methods:
+        its tolerance, or ``DECIDE_SAFETY sqrt(edge_weight) max(|lambda|, omega)`` when its
+        eigenvector has not converged in the truncation.
 
     Notes
     -----
@@ -141,6 +148,7 @@ class FloquetResult:
     partner: list[tuple[int, int, int]] = field(default_factory=list)
     averaged: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=complex))
     averaged_tol: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    max_real_uncertainty: float = float("nan")
 
     @property
     def decided(self) -> bool:
@@ -225,6 +233,11 @@ def floquet_result(
     near_zero = np.abs(reps.real) <= tol_i
     max_real = float(reps.real.max()) if reps.size else float("-inf")
     stable = not bool(unstable.any())
+    lead_unc = float("nan")
+    if reps.size:
+        loose = edges[0] > EDGE_TOL
+        reach = DECIDE_SAFETY * np.sqrt(edges[0]) * max(abs(reps[0]), w) if loose else 0.0
+        lead_unc = max(float(tol_i[0]), float(reach))
     return FloquetResult(
         exponents=reps,
         max_real=max_real,
@@ -238,4 +251,5 @@ def floquet_result(
         method=method,
         band=band,
         info=info or {},
+        max_real_uncertainty=lead_unc,
     )

@@ -19,7 +19,7 @@ from ..harmonics.hill_lattice import LatticeHill
 from ..harmonics.lattice import Lattice
 from ..system.periodic import PeriodicSystem
 from .averaged import Averaged
-from .band import BAND_ABOVE, time_averaged
+from .band import BAND_ABOVE
 from .checks import liouville_sum
 from .continuation import (
     TRACK_DRIFT,
@@ -31,6 +31,7 @@ from .continuation import (
 )
 from .outcome import LatticeExponents
 from .representatives import lattice_result
+from .resonance import averaged_modes
 from .result import SAFETY
 from .select import ACCEPT_WEIGHT, CENTRED, Candidate, clusters, count, select, targets
 from .shift_invert import (
@@ -159,7 +160,7 @@ class LatticeSearch:
         same = self.same = start if same_system else coarse
         if modes is None and same is not None:
             modes = same.modes
-        self.avg = modes if modes is not None else time_averaged(system)
+        self.avg = modes if modes is not None else averaged_modes(system)
         self.hill = LatticeHill(system, self.H)
         self.pencil = BalancedPencil(self.hill, self.avg.sq, self.avg.sv)
         self.centre = lattice.position(0)

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["ACCEPT_WEIGHT", "CENTRED", "CLUSTER_TOL", "DEPENDENT"]
+__all__ = ["ACCEPT_WEIGHT", "CENTRED", "CLUSTER_TOL", "DEPENDENT", "LOCK_TOL"]
 
 
 #: Averaged exponents closer than this (relative) are searched together.
@@ -27,6 +27,15 @@ ACCEPT_WEIGHT = 0.25
 #: Eigenvectors of one value are dependent when the smallest singular value of the stacked
 #: unit vectors is below this fraction of the largest.
 DEPENDENT = 1e-3
+
+#: A candidate whose conjugate lies within this (relative) of one of its own copies may be
+#: one of a locked pair: inside a parametric resonance the two exponents split apart with
+#: ``Im = h w1 / 2`` exactly, and a truncation that leaves ``Im`` a little off makes the
+#: decaying one look like a complex pair with its conjugate (on the gearbox variant at 3874
+#: rpm, order 2: -16.84 +- 1043.16i, 0.024 off the lock, where the monodromy matrix has +6.07
+#: and -16.82). Its conjugate is then not counted as another exponent: the search must find
+#: the second one (the split partner, or the conjugate's copy when the pair has not split).
+LOCK_TOL = 1e-4
 
 
 @dataclass
@@ -128,7 +137,8 @@ def select(
             if sv[-1] <= DEPENDENT * sv[0]:
                 continue
         mirrored = (-c.top[0], -c.top[1])
-        selfconj = _copy_of(c, np.conj(c.lam), mirrored, w, allow_zero=True)
+        lock = LOCK_TOL * max(abs(c.lam), w)
+        selfconj = _copy_of(c, np.conj(c.lam), mirrored, w, allow_zero=True, slack=lock)
         kept.append((c, not selfconj))
         known.append((c.lam, c.top, y, c.slack))
         left[home[0]] -= 1

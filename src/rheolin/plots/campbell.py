@@ -118,18 +118,26 @@ def campbell_figure(result: Any, fmax_hz: float | None = None, stability: Any = 
         a.set_xlim(rpm[0], rpm[-1])
         a.set_xlabel("input speed [rpm]")
         a.grid(alpha=0.3)
+    undecided = np.zeros(0, dtype=bool)
     if stability is not None:
         for r in stability.ranges:
             for a in (ax, axd):
                 a.axvspan(r.lower * RPM, r.upper * RPM, color="tab:red", alpha=0.12, lw=0)
+        undecided = np.asarray(stability.undecided, dtype=bool)
+        srpm = np.asarray(stability.speeds, dtype=float) * RPM
+        edges = np.concatenate([[srpm[0]], 0.5 * (srpm[1:] + srpm[:-1]), [srpm[-1]]])
+        for i in np.flatnonzero(undecided):  # neither stable nor unstable: hatched
+            for a in (ax, axd):
+                a.axvspan(edges[i], edges[i + 1], fc="none", ec="0.35", hatch="///", lw=0)
     ax.set_ylabel("damped natural frequency [Hz]")
     title = "Campbell diagram (time-averaged system)"
     if stability is not None:
-        title += "; " + (
-            f"Floquet: {len(stability.ranges)} unstable range(s), shaded"
-            if stability.ranges
-            else "Floquet: stable at every speed"
-        )
+        parts = []
+        if stability.ranges:
+            parts.append(f"{len(stability.ranges)} unstable range(s), shaded")
+        if undecided.any():
+            parts.append(f"{int(undecided.sum())} speed(s) undecided, hatched")
+        title += "; Floquet: " + (", ".join(parts) if parts else "stable at every speed")
     ax.set_title(title, fontsize=10)
     fig.legend(
         handles=shapes, fontsize=7, loc="outside right upper", title="mode kind", title_fontsize=7

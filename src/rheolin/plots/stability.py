@@ -27,8 +27,9 @@ def plot_stability(map: Any, path: str | Path) -> Path:
     Largest Floquet real part [1/s] against input speed [rpm] (symmetric-log axis when
     damped and growing values must both show, else linear up to zero), the per-speed
     decision tolerance as a grey band, unstable samples as red dots, unstable ranges shaded
-    red and labelled with their bounds and mechanism; speeds whose verdict the truncation
-    could still flip are marked with crosses.
+    red and labelled with their bounds (and uncertainties) and mechanism; speeds whose
+    verdict the truncation could still flip are marked with crosses and hatched (from
+    halfway to the previous sample to halfway to the next): neither stable nor unstable.
 
     Parameters
     ----------
@@ -65,14 +66,18 @@ def plot_stability(map: Any, path: str | Path) -> Path:
     ax.fill_between(rpm, -tol, tol, color="0.8", lw=0,
                     label="decision tolerance" if visible else None)  # fmt: skip
     ax.plot(rpm, mr, "-", color="tab:blue", lw=1.2, label="largest Floquet real part")
-    bad = ~np.asarray(map.stable, bool)
-    ax.plot(rpm[~bad], mr[~bad], "o", ms=3, color="tab:blue")
+    undecided = _undecided(map, len(rpm))
+    bad = ~np.asarray(map.stable, bool) & ~undecided
+    good = ~bad & ~undecided
+    ax.plot(rpm[good], mr[good], "o", ms=3, color="tab:blue")
     if bad.any():  # a legend entry only for what is drawn
         ax.plot(rpm[bad], mr[bad], "o", ms=4, color="tab:red", label="unstable")
-    decided = getattr(map, "decided", np.zeros(0, bool))
-    undecided = ~np.asarray(decided, bool) if len(decided) == len(rpm) else np.zeros(len(rpm), bool)
     if undecided.any():
         ax.plot(rpm[undecided], mr[undecided], "x", ms=7, color="k", label="verdict undecided")
+        edges = np.concatenate([[rpm[0]], 0.5 * (rpm[1:] + rpm[:-1]), [rpm[-1]]])
+        for i in np.flatnonzero(undecided):
+            hatch = {"facecolor": "none", "edgecolor": "0.35", "hatch": "///", "lw": 0}
+            ax.axvspan(edges[i], edges[i + 1], **hatch)
     ax.axhline(0.0, color="k", lw=0.8)
     for r in map.ranges:
         lo, hi = r.lower * RPM, r.upper * RPM
@@ -80,7 +85,9 @@ def plot_stability(map: Any, path: str | Path) -> Path:
         open_lo = "<" if r.lower_open else ""
         open_hi = ">" if r.upper_open else ""
         ax.annotate(
-            f"{open_lo}{lo:.6g} to {hi:.6g}{open_hi} rpm\n{_wrap(r.label)}",
+            f"{open_lo}{_bound(lo, getattr(r, 'lower_uncertainty', np.nan) * RPM)} to "
+            f"{_bound(hi, getattr(r, 'upper_uncertainty', np.nan) * RPM)}{open_hi} rpm\n"
+            f"{_wrap(r.label)}",
             (0.5 * (lo + hi), 0.45),
             xycoords=("data", "axes fraction"),
             ha="center",
@@ -97,7 +104,27 @@ def plot_stability(map: Any, path: str | Path) -> Path:
     status = (
         "stable over the whole range" if not bad.any() else f"{len(map.ranges)} unstable range(s)"
     )
+    if undecided.any():
+        status += f", {int(undecided.sum())} speed(s) undecided"
     ax.set_title(f"Floquet stability map: {status}")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8, loc="best")
     return save(fig, path)
+
+
+def _undecided(map: Any, n: int) -> np.ndarray:
+    """Per speed: the verdict is undecided (from the map's ``undecided`` or ``decided``)."""
+    if hasattr(map, "undecided"):
+        flags = np.asarray(map.undecided, bool)
+        if flags.size == n:
+            return flags
+    decided = np.asarray(getattr(map, "decided", np.zeros(0, bool)), bool)
+    return ~decided if decided.size == n else np.zeros(n, bool)
+
+
+def _bound(x: float, unc: float) -> str:
+    """``3439.46 +- 0.01`` (to the uncertainty's first digit), or ``3439.46`` without one."""
+    if not np.isfinite(unc) or unc <= 0:
+        return f"{x:.6g}"
+    digits = max(0, min(6, -int(np.floor(np.log10(unc)))))
+    return f"{x:.{digits}f} ± {unc:.1g}"

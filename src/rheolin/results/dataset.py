@@ -54,6 +54,7 @@ def floquet_attrs(sol: Solution) -> dict[str, Any]:
         "floquet_method": res.method,
         "leading_exponent_real": float(lead.real),
         "leading_exponent_frequency_hz": float(abs(lead.imag) / (2 * math.pi)),
+        "max_floquet_real_uncertainty": float(res.max_real_uncertainty),
         "floquet_seconds": float(res.info.get("seconds", float("nan"))),
     }
     if res.lattice is not None:

@@ -55,7 +55,7 @@ def summarize(ds: xr.Dataset) -> dict[str, Any]:
         "success",
     )
     keys += ("status", "message", "iterations", "residual", "residual_kind", "relative_residual")
-    keys += ("rtol", "stability", "max_floquet_real")
+    keys += ("rtol", "stability", "max_floquet_real", "max_floquet_real_uncertainty")
     keys += ("stability_decided", "floquet_method", "floquet_lattice_order", "floquet_lattice_size")
     keys += ("leading_exponent_real", "leading_exponent_frequency_hz", "floquet_seconds")
     keys += ("stability_mechanism",)

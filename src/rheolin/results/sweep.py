@@ -22,8 +22,12 @@ from .dataset import frequency_markers
 from .outputs import bearing_force_array, global_displacements, transmission_error_array
 
 __all__ = [
+    "STABILITY_FLAGS",
+    "STABILITY_STATES",
+    "floquet_uncertainty",
     "point_amplitudes",
     "speed_coordinates",
+    "stability_flag",
     "sweep_attrs",
     "sweep_dataset",
     "sweep_speeds",
@@ -117,8 +121,9 @@ def _reduce(p: OperatingPoint) -> dict[str, Any]:
         status=int(s.status),
         iterations=int(s.iterations),
         residual=float(s.residual),
-        stable=-1 if s.stable is None else int(s.stable),
+        stable=stability_flag(s.stable, s.floquet),
         max_floquet_real=float("nan") if s.max_floquet_real is None else s.max_floquet_real,
+        max_floquet_real_uncertainty=floquet_uncertainty(s.floquet),
         method=s.method,
         markers=frequency_markers(p.assembled),
         base_ratio=float(p.assembled.base_ratio),
@@ -136,9 +141,10 @@ def sweep_dataset(points: list[dict[str, Any]], options: dict[str, Any]) -> xr.D
             values = np.stack([p["amps"][key].values for p in points])
             data[key] = (dims, values, {"units": units, "long_name": f"{key} amplitude"})
     scalars = ("success", "status", "iterations", "residual", "stable", "max_floquet_real")
-    for key in scalars:
+    for key in (*scalars, "max_floquet_real_uncertainty"):
         data[key] = ("speed", np.array([p[key] for p in points]))
-    data["stable"] = data["stable"] + ({"flag_values": "1 stable, 0 unstable, -1 not checked"},)
+    data["stable"] = data["stable"] + ({"flag_values": STABILITY_FLAGS},)
+    data["max_floquet_real_uncertainty"] += ({"units": "1/s"},)
     data["method"] = ("speed", np.array([p["method"] for p in points]))
     harmonic = first["coords"]["harmonic"].values
     coords = speed_coordinates(speeds, harmonic, first["base_ratio"])
@@ -180,3 +186,31 @@ def sweep_attrs(options: dict[str, Any], marker_orders: dict[str, float]) -> dic
         marker_orders_json=json.dumps(marker_orders),
         convention="single-sided amplitudes 2|x_n| (|x_0| for the mean); radial = hypot(x, y)",
     )
+
+
+#: The values of the ``stable`` flag of sweep.nc and of a study's points.
+STABILITY_FLAGS = "1 stable, 0 unstable, -1 not checked, -2 undecided"
+
+#: The state each flag value stands for (sweep.json's ``stability``).
+STABILITY_STATES = {1: "stable", 0: "unstable", -1: "not checked", -2: "undecided"}
+
+
+def stability_flag(stable: bool | None, floquet: Any) -> int:
+    """The ``stable`` flag of a point: -1 not checked, -2 when its Floquet verdict is not
+    decided (whichever side it leans to: never reported stable), else 1 or 0.
+
+    >>> from types import SimpleNamespace
+    >>> stability_flag(True, SimpleNamespace(decided=False)), stability_flag(None, None)
+    (-2, -1)
+    """
+    if stable is None:
+        return -1
+    if floquet is not None and not floquet.decided:
+        return -2
+    return int(stable)
+
+
+def floquet_uncertainty(floquet: Any) -> float:
+    """The stated uncertainty of a point's largest Floquet real part [1/s] (NaN: none)."""
+    u = getattr(floquet, "max_real_uncertainty", None)
+    return float("nan") if u is None else float(u)

@@ -46,10 +46,29 @@ _ONE = (
 UNITS: dict[str, str] = {
     **dict.fromkeys(_ONE, "1"),
     **dict.fromkeys(
-        ("max_real", "tol", "max_floquet_real", "map_max_real", "range_max_real"), "1/s"
+        (
+            "max_real",
+            "tol",
+            "max_floquet_real",
+            "map_max_real",
+            "range_max_real",
+            "max_real_uncertainty",
+            "max_floquet_real_uncertainty",
+        ),
+        "1/s",
     ),
     **dict.fromkeys(("seconds", "solve_seconds", "floquet_seconds"), "s"),
-    **dict.fromkeys(("speed", "range_lower", "range_upper", "critical_speed"), "rad/s"),
+    **dict.fromkeys(
+        (
+            "speed",
+            "range_lower",
+            "range_upper",
+            "range_lower_uncertainty",
+            "range_upper_uncertainty",
+            "critical_speed",
+        ),
+        "rad/s",
+    ),
     **dict.fromkeys(
         ("speed_rpm", "critical_speed_rpm", "range_lower_rpm", "range_upper_rpm"), "rpm"
     ),

@@ -7,7 +7,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..floquet import FloquetResult, floquet
 from ..harmonics.sets import as_harmonic_set
@@ -21,10 +20,19 @@ from .mechanism import (
     Mechanism,
 )
 from .mechanism import identify as _identify
+from .ranges import refine_edge, states, unstable_runs
 
-__all__ = ["StabilityMap", "UnstableRange", "map_from_results", "mechanism", "stability_map"]
+__all__ = [
+    "StabilityMap",
+    "UnstableRange",
+    "map_from_results",
+    "mechanism",
+    "stability_map",
+]
+#: Accuracy of the leading exponent asked of an edge's verdict left undecided by its lattice
+#: (at most: a third of its real part is enough to decide it).
+EDGE_RTOL = 0.1
 
-_EPS = float(np.finfo(float).eps)
 __categories__ = (ROTATING_DAMPING, CIRCULATORY, MESH, ASYMMETRY, COMBINED, UNIDENTIFIED)
 
 
@@ -35,7 +43,8 @@ class UnstableRange:
     Attributes
     ----------
     lower, upper
-        Bounds [rad/s], refined by bisection between the bracketing samples.
+        Bounds [rad/s], refined between the bracketing samples where every evaluation is a
+        decided verdict (:mod:`rheolin.stability.ranges`).
     lower_open, upper_open
         True when the range reaches the end of the sweep (the bound is the sweep's end).
     max_real
@@ -47,6 +56,10 @@ class UnstableRange:
     detail
         The :class:`~rheolin.stability.mechanism.Mechanism` found at the worst sample (the
         generators, principal/secondary/combination, the frequency relation), or None.
+    lower_uncertainty, upper_uncertainty
+        How far each bound may be from the true edge [rad/s]: the edge lies between a speed
+        decided stable and one decided unstable, at most this far from the bound (NaN for an
+        open end).
     """
 
     lower: float
@@ -56,6 +69,8 @@ class UnstableRange:
     max_real: float
     mechanism: str
     detail: Mechanism | None = None
+    lower_uncertainty: float = float("nan")
+    upper_uncertainty: float = float("nan")
 
     @property
     def label(self) -> str:
@@ -75,7 +90,10 @@ class StabilityMap:
         Largest Floquet real part per speed [1/s].
     tol
         Tolerance of the decisive exponent per speed [1/s].
-    stable, marginal, converged
+    stable
+        Per speed: the verdict is stable *and decided* (an undecided speed is not stable:
+        see ``state``).
+    marginal, converged
         Per speed (see :class:`~rheolin.FloquetResult`).
     frequency
         ``|Im|`` of the leading exponent per speed [rad/s] (folded into ``(-w1/2, w1/2]``
@@ -88,6 +106,12 @@ class StabilityMap:
         Per speed: the Floquet method used (``"dense"``, ``"sparse"``, ``"lattice"``).
     info
         Totals: Floquet evaluations, seconds, the largest lattice.
+    state
+        Per speed: ``"stable"``, ``"unstable"`` or ``"undecided"`` (the verdict is not
+        decided: the truncation could still flip it, whichever side it leans to).
+    max_real_uncertainty
+        Per speed: the stated uncertainty of ``max_real`` [1/s]
+        (:attr:`FloquetResult.max_real_uncertainty`).
     """
 
     speeds: np.ndarray
@@ -101,11 +125,22 @@ class StabilityMap:
     decided: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     method: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=str))
     info: dict[str, Any] = field(default_factory=dict)
+    state: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=str))
+    max_real_uncertainty: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def all_stable(self) -> bool:
-        """True when every speed of the sweep is stable."""
+        """True when every speed of the sweep is decided stable."""
         return bool(np.all(self.stable))
+
+    @property
+    def undecided(self) -> np.ndarray:
+        """Per speed: the verdict is undecided."""
+        n = self.speeds.size
+        if self.state.size == n:
+            return np.asarray(self.state == "undecided")
+        decided = self.decided if self.decided.size == n else np.ones(n, dtype=bool)
+        return ~np.asarray(decided, bool)
 
     def to_dataset(self) -> Any:
         """The map as an ``xarray.Dataset`` (dims ``speed`` and ``range``).
@@ -123,9 +158,14 @@ class StabilityMap:
         n = self.speeds.size
         decided = self.decided if self.decided.size == n else np.ones(n, dtype=bool)
         method = self.method if self.method.size == n else np.full(n, "")
+        state = self.state if self.state.size == n else states(self.stable, decided)
+        unc = self.max_real_uncertainty
+        unc = unc if unc.size == n else np.full(n, np.nan)
         ds = xr.Dataset(
             {
                 "decided": (("speed",), decided.astype(bool)),
+                "state": (("speed",), state.astype(str)),
+                "max_real_uncertainty": (("speed",), unc.astype(float)),
                 "floquet_method": (("speed",), method.astype(str)),
                 "range_label": (("range",), np.array([r.label for r in rg], str)),
                 "max_real": (("speed",), self.max_real),
@@ -136,6 +176,14 @@ class StabilityMap:
                 "frequency": (("speed",), self.frequency / (2 * np.pi), {"units": "Hz"}),
                 "range_lower": (("range",), np.array([r.lower for r in rg], float)),
                 "range_upper": (("range",), np.array([r.upper for r in rg], float)),
+                "range_lower_uncertainty": (
+                    ("range",),
+                    np.array([r.lower_uncertainty for r in rg], float),
+                ),
+                "range_upper_uncertainty": (
+                    ("range",),
+                    np.array([r.upper_uncertainty for r in rg], float),
+                ),
                 "range_lower_open": (("range",), np.array([r.lower_open for r in rg], bool)),
                 "range_upper_open": (("range",), np.array([r.upper_open for r in rg], bool)),
                 "range_max_real": (("range",), np.array([r.max_real for r in rg], float)),
@@ -145,6 +193,10 @@ class StabilityMap:
         )
         ds["speed"].attrs["units"] = "rad/s"
         ds["max_real"].attrs.update(units="1/s", long_name="largest Floquet real part")
+        ds["max_real_uncertainty"].attrs.update(units="1/s")
+        for name in ("range_lower", "range_upper", "range_lower_uncertainty"):
+            ds[name].attrs["units"] = "rad/s"
+        ds["range_upper_uncertainty"].attrs["units"] = "rad/s"
         ds.attrs["title"] = "Floquet stability map"
         return ds
 
@@ -161,17 +213,19 @@ def stability_map(
     progress: Callable[[int, FloquetResult], None] | None = None,
     memory_budget: Any = None,
     identify: bool | None = None,
+    rtol: float | None = None,
 ) -> StabilityMap:
     """Largest Floquet real part of a :class:`~rheolin.mechanics.Model` against speed.
 
     At every speed the full periodic system is assembled and :func:`rheolin.floquet` decides
     stability with its automatic truncation (dense Hill for small systems, the harmonic
-    lattice for gearboxes; balanced pencil, per-exponent tolerances). Contiguous unstable
-    samples form an :class:`UnstableRange`; its bounds are refined (Brent's method on the
-    margin ``max Re - tol`` between the bracketing samples) to a relative precision
-    ``refine``, and its mechanism is identified at its worst sample
-    (:mod:`rheolin.stability.mechanism`). With the lattice method the refinement tracks the
-    growing exponent alone (a search near its time-averaged modes), not every exponent.
+    lattice for gearboxes; balanced pencil, per-exponent tolerances), each speed continued
+    from the previous one (:class:`~rheolin.floquet.Continuation`). Contiguous samples that
+    are not decided stable, with at least one decided unstable, form an
+    :class:`UnstableRange`; its bounds are refined between the bracketing decided samples
+    to a relative precision ``refine`` where every evaluation is a full, decided verdict
+    (:func:`rheolin.stability.ranges.refine_edge`), each with its uncertainty, and its
+    mechanism is identified at its worst sample (:mod:`rheolin.stability.mechanism`).
 
     Parameters
     ----------
@@ -195,6 +249,9 @@ def stability_map(
         Called as ``progress(i, result)`` after each speed.
     memory_budget
         Passed to :func:`rheolin.floquet`.
+    rtol
+        Relative accuracy of each speed's largest real part (:func:`rheolin.floquet`; None:
+        not refined beyond what the verdict needs, ``max_real_uncertainty`` says how far).
 
     Examples
     --------
@@ -228,21 +285,32 @@ def stability_map(
             return as_harmonic_set(harmonics(system))
         return as_harmonic_set(harmonics)
 
-    def evaluate(W: float, near: Any = None, continuation: Any = None) -> tuple[Any, FloquetResult]:
+    def evaluate(
+        W: float,
+        continuation: Any = None,
+        accuracy: float | None = rtol,
+        lattice_order: int | None = None,
+    ) -> tuple[Any, FloquetResult]:
         a = model.assemble(float(W))
-        if near is not None:
-            res = floquet(
-                a.system, method="lattice", order=order, near=near, memory_budget=memory_budget
-            )
-        else:
+        if lattice_order is not None:
             res = floquet(
                 a.system,
-                truncation(a.system),
-                method=method,
-                order=order,
+                method="lattice",
+                order=lattice_order,
                 memory_budget=memory_budget,
                 continuation=continuation,
+                rtol=accuracy,
             )
+            return a, res
+        res = floquet(
+            a.system,
+            truncation(a.system),
+            method=method,
+            order=order,
+            memory_budget=memory_budget,
+            continuation=continuation,
+            rtol=accuracy,
+        )
         return a, res
 
     from ..floquet import Continuation
@@ -283,59 +351,69 @@ def map_from_results(
 
     Used by :func:`stability_map`, and by sweeps whose workers check each speed's stability
     as part of the steady-state solve (``Solution.floquet``): only the refinement of the
-    range bounds (tracking the growing exponent) and the naming of the mechanisms are done
-    here.
+    range bounds and the naming of the mechanisms are done here. ``evaluate(speed,
+    continuation, accuracy[, lattice_order])`` returns ``(assembled, FloquetResult)`` at a
+    speed (default: the model's automatic Floquet verdict; with ``lattice_order``, the lattice
+    method at that order, not raised); the edges call it with ``accuracy = inf`` (their
+    verdicts need to be decided, not refined).
     """
     speeds = np.asarray(speeds_rad_s, dtype=float).ravel()
     if len(results) != speeds.size:
         raise ValueError(f"need one Floquet result per speed, got {len(results)} for {speeds.size}")
     count = [0]
 
-    def default_evaluate(W: float, near: Any = None) -> tuple[Any, FloquetResult]:
+    def default_evaluate(
+        W: float,
+        continuation: Any = None,
+        accuracy: float | None = None,
+        lattice_order: int | None = None,
+    ) -> tuple[Any, FloquetResult]:
         a = model.assemble(float(W))
-        method = "lattice" if near is not None else "auto"
-        return a, floquet(
-            a.system, method=method, order=order, near=near, memory_budget=memory_budget
+        res = floquet(
+            a.system,
+            method="auto" if lattice_order is None else "lattice",
+            order=order if lattice_order is None else lattice_order,
+            memory_budget=memory_budget,
+            continuation=continuation,
+            rtol=accuracy,
         )
+        return a, res
 
     run = evaluate if evaluate is not None else default_evaluate
-
-    def counted(W: float, near: Any = None) -> tuple[Any, FloquetResult]:
-        count[0] += 1
-        return run(W, near)
-
+    decided = np.array([r.decided for r in results], dtype=bool)
+    verdicts = np.array([r.stable for r in results], dtype=bool)
+    state = states(verdicts, decided)
     smap = StabilityMap(
         speeds=speeds,
         max_real=np.array([r.max_real for r in results]),
         tol=np.array([r.tolerances[0] if r.tolerances.size else r.tol for r in results]),
-        stable=np.array([r.stable for r in results]),
+        stable=state == "stable",
         marginal=np.array([r.marginal for r in results]),
         converged=np.array([r.converged for r in results]),
         frequency=np.array([abs(r.leading.imag) for r in results]),
-        decided=np.array([r.decided for r in results]),
+        decided=decided,
         method=np.array([r.method for r in results]),
+        state=state,
+        max_real_uncertainty=np.array([_uncertainty(r) for r in results]),
     )
-    unstable = ~smap.stable
-    i = 0
-    while i < speeds.size:
-        if not unstable[i]:
-            i += 1
-            continue
-        j = i
-        while j + 1 < speeds.size and unstable[j + 1]:
-            j += 1
+    for i, j in unstable_runs(state):
         worst = i + int(np.argmax(smap.max_real[i : j + 1]))
         lead = results[worst]
-        tracked = _tracked(lead)
-
-        def margin(W: float, tracked: Any = tracked) -> float:
-            return _margin(counted(W, tracked)[1])
-
-        lo, hi = speeds[i], speeds[j]
-        if i > 0:
-            lo = _edge(margin, speeds[i - 1], speeds[i], refine)
-        if j < speeds.size - 1:
-            hi = _edge(margin, speeds[j + 1], speeds[j], refine)
+        unstable = np.flatnonzero(state[i : j + 1] == "unstable") + i
+        lo, hi = float(speeds[i]), float(speeds[j])
+        lo_unc = hi_unc = float("nan")
+        if i > 0:  # bracket: the decided stable sample below, the first decided unstable one
+            k = int(unstable[0])
+            edge = _edge(
+                run, count, (speeds[i - 1], results[i - 1]), (speeds[k], results[k]), refine
+            )
+            lo, lo_unc = edge.speed, edge.uncertainty
+        if j < speeds.size - 1:  # and above: the decided stable one, the last unstable one
+            k = int(unstable[-1])
+            edge = _edge(
+                run, count, (speeds[j + 1], results[j + 1]), (speeds[k], results[k]), refine
+            )
+            hi, hi_unc = edge.speed, edge.uncertainty
         detail = None
         category = UNIDENTIFIED
         if identify_mechanism:
@@ -356,9 +434,10 @@ def map_from_results(
                 float(smap.max_real[i : j + 1].max()),
                 category,
                 detail,
+                lo_unc,
+                hi_unc,
             )
         )
-        i = j + 1
     smap.info = {
         "evaluations": count[0],
         "largest_lattice": max(
@@ -374,35 +453,70 @@ def evaluate_lattice(model: Any, W: float, order: int | None, budget: Any) -> tu
     return a, floquet(a.system, method="lattice", order=order, memory_budget=budget)
 
 
-def _tracked(res: FloquetResult) -> Any:
-    """Values near which a lattice search finds the growing exponents again (None: all)."""
-    if res.method != "lattice" or res.dominant.size == 0:
+def _edge(
+    run: Callable[..., tuple[Any, FloquetResult]],
+    count: list[int],
+    stable: tuple[float, FloquetResult],
+    unstable: tuple[float, FloquetResult],
+    refine: float,
+) -> Any:
+    """One range edge between two decided samples, every evaluation a full verdict continued
+    from the previous one (its largest real part not refined: the verdict is what counts).
+
+    Between two lattice verdicts the evaluations use the larger of their lattice orders
+    (the edge's speeds need no more than its samples, except within the truncation
+    uncertainty of the crossing). Where that order leaves a speed undecided, its leading
+    exponent is refined near it until its uncertainty is a third of its real part, then the
+    next order decides;
+    a speed still undecided is bracketed by :func:`~rheolin.stability.ranges.refine_edge`.
+    (The automatic verdict would climb through every order up to the one that decides, at
+    ten times the cost.)"""
+    from ..floquet import Continuation
+
+    cont = Continuation()
+    orders = [_lattice_order(r) for r in (stable[1], unstable[1])]
+    fixed = max(orders) if None not in orders else None  # type: ignore[type-var]
+
+    def verdict(W: float) -> FloquetResult:
+        count[0] += 1
+        if fixed is None:  # the automatic verdict raises its own order where undecided
+            return run(W, cont, float("inf"))[1]
+        res = run(W, cont, float("inf"), fixed)[1]
+        if not res.decided:  # the leading exponent refined near it, enough to decide
+            count[0] += 1
+            res = run(W, cont, _deciding_rtol(res), fixed)[1]
+        if not res.decided:  # then the next order
+            count[0] += 1
+            res = run(W, cont, float("inf"), fixed + 1)[1]
+        return res
+
+    return refine_edge(
+        verdict, (float(stable[0]), stable[1]), (float(unstable[0]), unstable[1]), refine
+    )
+
+
+def _deciding_rtol(res: FloquetResult) -> float:
+    """An ``rtol`` that makes the leading exponent's uncertainty a third of its real part
+    (the target of :func:`~rheolin.floquet.accuracy.target`), at most :data:`EDGE_RTOL`."""
+    from ..floquet.accuracy import ZETA_FLOOR
+
+    re, lam = abs(float(res.max_real)), complex(res.leading)
+    if not (np.isfinite(re) and np.isfinite(lam)) or re == 0:
+        return EDGE_RTOL
+    return float(min(EDGE_RTOL, re / (3.0 * max(re, ZETA_FLOOR * abs(lam)))))
+
+
+def _lattice_order(res: FloquetResult) -> int | None:
+    """The order of the lattice a verdict was decided on (None: not a lattice verdict)."""
+    lattice = getattr(res, "lattice", None)
+    if res.method != "lattice" or lattice is None:
         return None
-    grow = res.exponents.real > res.tolerances
-    idx = res.dominant[grow] if grow.any() else res.dominant[:1]
-    partners = [m for p in (res.partner[i] for i in np.flatnonzero(grow)) for m in p[1:] if m >= 0]
-    modes = sorted({int(i) for i in idx} | {int(m) for m in partners})
-    return res.averaged[modes]
+    return int(lattice.order)
 
 
-def _margin(res: FloquetResult) -> float:
-    """Positive exactly when unstable: the largest ``Re - tol`` over the exponents, or (when
-    stable) ``min(max_real, 0) - tol`` of the leading exponent; continuous across a
-    transversal crossing of the axis."""
-    if not res.stable:
-        return float(np.max(res.exponents.real - res.tolerances))
-    return min(res.max_real, 0.0) - float(res.tolerances[0] if res.tolerances.size else res.tol)
-
-
-def _edge(margin: Any, stable_side: float, unstable_side: float, rtol: float) -> float:
-    """Speed where ``margin`` changes sign between the two samples (Brent's method)."""
-    if rtol <= 0:
-        return unstable_side
-    fa, fb = margin(stable_side), margin(unstable_side)
-    if not (fa <= 0 < fb):
-        return unstable_side  # the tracked exponent does not bracket the edge: keep the sample
-    lo, hi = sorted((stable_side, unstable_side))
-    return float(brentq(margin, lo, hi, xtol=rtol * abs(unstable_side), rtol=4 * _EPS))
+def _uncertainty(res: FloquetResult) -> float:
+    u = getattr(res, "max_real_uncertainty", float("nan"))
+    return float(u) if u is not None else float("nan")
 
 
 def mechanism(model: Any, assembled: Any, harmonics: Any = None, *, method: str = "auto") -> str:

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..results.sweep import speed_coordinates, sweep_attrs
+from ..results.sweep import STABILITY_FLAGS, speed_coordinates, sweep_attrs
 from .spec import StudySpec
 
 __all__ = ["STATUS_ERROR", "assemble", "maps_dataset", "parameter_coords"]
@@ -85,7 +85,7 @@ def assemble(
     data["stable"] = (
         lead,
         data["stable"][1],
-        {"flag_values": "1 stable, 0 unstable, -1 not checked"},
+        {"flag_values": STABILITY_FLAGS},
     )
     harmonic = flat["harmonic"].values if "harmonic" in flat.coords else np.zeros(0, dtype=int)
     w1 = float(chunks[0].attrs["w1_per_speed"]) if chunks else float("nan")

@@ -5,8 +5,9 @@ A chunk file is a NetCDF file that ``xarray.open_dataset`` reads on its own:
 * ``point`` (global point number, see :class:`~rheolin.study.spec.StudySpec`) and ``speed``;
 * amplitudes ``response(point, harmonic, node)``, ``bearing_force(point, bearing, harmonic)``,
   ``dte(point, mesh, harmonic)`` (as in ``sweep.nc``);
-* per point ``success``, ``status``, ``iterations``, ``residual``, ``stable`` (1/0/-1),
-  ``max_floquet_real``, ``method``, ``message``, ``seconds``;
+* per point ``success``, ``status``, ``iterations``, ``residual``, ``stable`` (1/0/-1/-2:
+  :data:`~rheolin.results.sweep.STABILITY_FLAGS`), ``max_floquet_real`` and
+  ``max_floquet_real_uncertainty``, ``method``, ``message``, ``seconds``;
 * the Floquet result of each point, pickled (:class:`~rheolin.FloquetResult`, to rebuild the
   stability map on resume): bytes ``floquet_offset[i] : floquet_offset[i] + floquet_size[i]``
   of ``floquet_pickle(byte)`` (size 0: not computed). Read them with :func:`floquet_results`;
@@ -29,7 +30,7 @@ import xarray as xr
 
 from ..results.compute import OperatingPoint
 from ..results.dataset import frequency_markers, netcdf_engine, write_dataset
-from ..results.sweep import point_amplitudes
+from ..results.sweep import floquet_uncertainty, point_amplitudes, stability_flag
 
 #: Coordinates a chunk keeps (frequency and order follow from speed and harmonic).
 _KEEP = ("harmonic", "node", "body", "bearing", "mesh")
@@ -50,8 +51,11 @@ def point_row(p: OperatingPoint, floquet: Any, seconds: float) -> xr.Dataset:
         "status": int(s.status),
         "iterations": int(s.iterations),
         "residual": float(s.residual),
-        "stable": -1 if s.stable is None else int(s.stable),
+        "stable": stability_flag(s.stable, floquet),
         "max_floquet_real": np.nan if s.max_floquet_real is None else float(s.max_floquet_real),
+        "max_floquet_real_uncertainty": floquet_uncertainty(floquet)
+        if s.stable is not None
+        else np.nan,
         "method": str(s.method),
         "message": str(s.message),
         "seconds": float(seconds),

@@ -1,13 +1,17 @@
 """The result files of a study, written atomically into its output directory.
 
-* ``sweep.nc``: :attr:`StudyResult.dataset` plus ``map_max_real`` (the map's largest Floquet
-  real part per point);
+* ``sweep.nc``: :attr:`StudyResult.dataset` (``stable`` flagged 1/0/-1/-2:
+  :data:`~rheolin.results.sweep.STABILITY_FLAGS`; ``max_floquet_real`` with its
+  ``max_floquet_real_uncertainty``) plus ``map_max_real`` (the map's largest Floquet real part
+  per point);
 * ``stability_map.nc`` (with the map): :meth:`StudyResult.stability_dataset`;
-* ``sweep.json``: per point ``success``, ``status``, ``iterations``, ``stable`` (nested as
-  ``(*parameters, speed)``), every unstable range (bounds in rpm, open ends, largest real
-  part, ``mechanism`` category, one-line ``label`` and the mechanism's ``detail``) with its
-  parameter values, the failed points with their messages, the resonance peaks of a speed
-  sweep with their half-power amplification factors (API 684), warnings;
+* ``sweep.json``: per point ``success``, ``status``, ``iterations``, ``stable`` (true, false,
+  or null when not checked or undecided) and ``stability`` (``"stable"``, ``"unstable"``,
+  ``"undecided"``, ``"not checked"``), nested as ``(*parameters, speed)``; every unstable
+  range (bounds and their uncertainties in rpm, open ends, largest real part, ``mechanism``
+  category, one-line ``label`` and the mechanism's ``detail``) with its parameter values,
+  the failed points with their messages, the resonance peaks of a speed sweep with their
+  half-power amplification factors (API 684), warnings;
 * plots: ``sweep.png`` and ``stability_map.png`` without parameters, one
   ``vary_<parameter>.png`` per parameter otherwise.
 
@@ -28,6 +32,7 @@ import xarray as xr
 from ..io.atomic import atomic_write
 from ..results.dataset import write_dataset
 from ..results.schema import SCHEMA_VERSION
+from ..results.sweep import STABILITY_STATES
 from ..results.units import significant
 from .store import CheckpointStore
 
@@ -81,6 +86,8 @@ def sweep_table(result: Any) -> dict[str, Any]:
                     "parameters": values,
                     "lower_rpm": significant(r.lower * RPM),
                     "upper_rpm": significant(r.upper * RPM),
+                    "lower_uncertainty_rpm": _finite(r.lower_uncertainty * RPM),
+                    "upper_uncertainty_rpm": _finite(r.upper_uncertainty * RPM),
                     "open_below": r.lower_open,
                     "open_above": r.upper_open,
                     "max_real_per_s": r.max_real,
@@ -115,6 +122,7 @@ def sweep_table(result: Any) -> dict[str, Any]:
         "status": ds["status"].values.tolist(),
         "iterations": ds["iterations"].values.tolist(),
         "stable": _nested(stable, lambda v: None if v < 0 else bool(v)),
+        "stability": _nested(stable, lambda v: STABILITY_STATES[int(v)]),
         "unstable_ranges_rpm": [(r["lower_rpm"], r["upper_rpm"]) for r in ranges],
         "unstable_ranges": ranges,
         "failed": failed,
@@ -191,3 +199,8 @@ def _plots(result: Any, ds: xr.Dataset, out: Path, quantity: str) -> list[Path]:
     return [
         parameter_plot(result, p.path, out / plot_name(p.path), quantity) for p in spec.parameters
     ]
+
+
+def _finite(x: float) -> float | None:
+    """JSON has no NaN: None instead (an open end's uncertainty)."""
+    return float(x) if np.isfinite(x) else None

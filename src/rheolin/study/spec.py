@@ -54,6 +54,8 @@ class Settings:
     ``stability``: the per-point verdict (None: when it fits the memory budget, True, False).
     ``stability_map``: keep every point's Floquet result and build the stability map of each
     parameter combination (also when the per-point verdict is off).
+    ``floquet_rtol``: the relative accuracy of each verdict's largest real part
+    (:func:`rheolin.floquet`'s ``rtol``; None: its default).
     """
 
     method: str = "auto"
@@ -62,6 +64,7 @@ class Settings:
     rtol: float = 1e-10
     stability: bool | None = None
     stability_map: bool = True
+    floquet_rtol: float | None = None
 
 
 @dataclass(frozen=True, eq=False)

@@ -121,7 +121,7 @@ class _Chain:
         self.spec = spec
         self.last: int | None = None
         self.history: list[tuple[float, Any]] = []  # (speed, solution), the last few
-        self.continuation = Continuation()
+        self.continuation = Continuation(rtol=spec.settings.floquet_rtol)
 
     def start(self, point: int) -> tuple[Any, Any]:
         """``(x0, continuation)`` for ``point``."""

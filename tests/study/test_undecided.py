@@ -1,0 +1,74 @@
+"""An undecided stability verdict is its own state in ``rheolin sweep`` (issue 30): never
+``stable: true`` in sweep.json, its own flag in sweep.nc, named on the console, and a sweep
+with one exits 1 (docs/stability.md: the exit-code rule).
+
+The verdicts are the real ones of the band model (a rigid rotor on a spring fixed in its own
+axes, unstable between 955 and 1050 rpm) except at two stable speeds, where the Floquet
+result is made undecided the way a truncation that has not converged makes it (every
+representative's energy at the edge of the dense Hill grid): what is reported must follow
+``FloquetResult.decided``, whatever made it False.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+from typer.testing import CliRunner
+
+from rheolin.cli import app
+
+sys.path.insert(0, str(Path(__file__).parent))
+from study_cases import BAND
+
+import rheolin.solvers.solve  # noqa: F401  (the module, for its floquet)
+
+solve_module = sys.modules["rheolin.solvers.solve"]
+
+UNDECIDED_RPM = (900.0, 1200.0)
+
+
+@pytest.fixture
+def undecided_at(monkeypatch):
+    """Make the verdicts at :data:`UNDECIDED_RPM` undecided (stable, not converged)."""
+    real = solve_module.floquet
+
+    def floquet(system, *args, **kwargs):
+        res = real(system, *args, **kwargs)
+        rpm = system.omega * 30 / np.pi  # the band model's w1 is its speed
+        if any(abs(rpm - x) < 1e-6 for x in UNDECIDED_RPM):
+            assert res.stable and res.method == "dense"
+            res.converged = False
+            res.edge_weight = np.ones_like(res.edge_weight)
+            assert not res.decided
+        return res
+
+    monkeypatch.setattr(solve_module, "floquet", floquet)
+
+
+def test_sweep_reports_undecided_speeds(undecided_at, tmp_path: Path) -> None:
+    model = tmp_path / "band.toml"
+    model.write_text(BAND)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(
+        app,
+        ["sweep", str(model), "--speeds", "850:1250:50rpm", "--out", str(out), "--workers", "1"],
+        catch_exceptions=False,
+    )
+    assert res.exit_code == 1, res.output
+    table = json.loads((out / "sweep.json").read_text())
+    rpm = np.round(np.array(table["speeds_rpm"]), 6)
+    undecided = np.isin(rpm, UNDECIDED_RPM)
+    assert [table["stable"][i] for i in np.flatnonzero(undecided)] == [None, None]
+    assert [table["stability"][i] for i in np.flatnonzero(undecided)] == ["undecided"] * 2
+    assert "undecided" not in [table["stability"][i] for i in np.flatnonzero(~undecided)]
+    with xr.open_dataset(out / "sweep.nc") as ds:
+        flags = ds["stable"].values
+        assert np.all(flags[undecided] == -2)
+        assert "-2 undecided" in ds["stable"].attrs["flag_values"]
+        assert "max_floquet_real_uncertainty" in ds
+    assert "2 speeds undecided: 900, 1200 rpm" in res.output
