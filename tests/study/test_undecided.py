@@ -72,3 +72,45 @@ def test_sweep_reports_undecided_speeds(undecided_at, tmp_path: Path) -> None:
         assert "-2 undecided" in ds["stable"].attrs["flag_values"]
         assert "max_floquet_real_uncertainty" in ds
     assert "2 speeds undecided: 900, 1200 rpm" in res.output
+
+
+def test_a_failed_check_leaves_the_point_solved_and_its_speed_undecided(
+    monkeypatch, tmp_path: Path
+) -> None:
+    """The eigensolver fails at 900 rpm (injected): the steady state there stands, the point
+    says why it was not checked, and the map calls that speed undecided (exit 1), not
+    stable and not a crash."""
+    from scipy.sparse.linalg import ArpackNoConvergence
+
+    floquet_package = sys.modules[
+        "rheolin.floquet"
+    ]  # the package (rheolin.floquet is the function)
+
+    def failing(real):
+        def floquet(system, *args, **kwargs):
+            if abs(system.omega * 30 / np.pi - 900.0) < 1e-6:
+                raise ArpackNoConvergence("ARPACK error -1: No convergence", [], [])
+            return real(system, *args, **kwargs)
+
+        return floquet
+
+    monkeypatch.setattr(solve_module, "floquet", failing(solve_module.floquet))
+    monkeypatch.setattr(floquet_package, "floquet", failing(floquet_package.floquet))
+    model = tmp_path / "band.toml"
+    model.write_text(BAND)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(
+        app,
+        ["sweep", str(model), "--speeds", "850:1250:50rpm", "--out", str(out), "--workers", "1"],
+        catch_exceptions=False,
+    )
+    assert res.exit_code == 1, res.output
+    table = json.loads((out / "sweep.json").read_text())
+    i = int(np.flatnonzero(np.isclose(table["speeds_rpm"], 900.0))[0])
+    assert table["stable"][i] is None and table["stability"][i] == "not checked"
+    with xr.open_dataset(out / "sweep.nc") as ds:
+        assert bool(ds["success"].values[i])
+        assert "ArpackNoConvergence" in str(ds["message"].values[i]) or "ARPACK" in str(
+            ds["message"].values[i]
+        )
+    assert "1 speed undecided: 900 rpm" in res.output

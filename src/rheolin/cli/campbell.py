@@ -127,6 +127,11 @@ def campbell(
                 f"{shown} rpm[/yellow] (the Floquet truncation could still flip their verdict; "
                 "docs/stability.md)"
             )
+        for w, why in smap.info.get("failed", {}).items():
+            console.print(
+                f"stability at {w * 30 / np.pi:.6g} rpm: [yellow]no verdict[/yellow] "
+                f"({escape(why)})"
+            )
         if smap.ranges or late.size:
             code = EXIT_FAILED
     console.print("wrote " + ", ".join(str(p) for p in written), markup=False)

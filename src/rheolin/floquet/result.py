@@ -12,12 +12,23 @@ from ..harmonics.lattice import Lattice
 __all__ = [
     "DECIDE_SAFETY",
     "EDGE_TOL",
+    "NUMERICAL_FAILURES",
     "REL_FLOOR",
     "SAFETY",
     "SPLIT_FACTOR",
     "TRUNCATION_SAFETY",
     "FloquetResult",
+    "failed_result",
 ]
+
+#: What a numerical failure of a stability check raises (a factorization, an eigensolver that
+#: did not converge): the verdict is left open, the steady state stands.
+NUMERICAL_FAILURES: tuple[type[Exception], ...] = (
+    ArithmeticError,
+    ValueError,
+    RuntimeError,
+    np.linalg.LinAlgError,
+)
 
 
 #: An exponent is called unstable only when its real part exceeds this many error bounds.
@@ -87,7 +98,8 @@ class FloquetResult:
         a growing real pair (checked on a scan of the damped Mathieu equation). Heavily
         damped high modes that need more harmonics do not make a stability verdict uncertain.
     method
-        ``"dense"`` or ``"sparse"``.
+        ``"dense"``, ``"sparse"`` or ``"lattice"``; ``"failed"`` for a check that failed
+        numerically (:func:`failed_result`: undecided, the reason in ``info["error"]``).
     band
         Sparse method: every exponent with ``|Re| <= band`` in the searched frequency range
         was found (``inf`` for dense).
@@ -153,6 +165,8 @@ class FloquetResult:
     @property
     def decided(self) -> bool:
         """See the class docstring."""
+        if self.method == "failed":
+            return False
         if self.method == "lattice":
             return self._decided_lattice()
         if self.converged or self.exponents.size == 0:
@@ -252,4 +266,26 @@ def floquet_result(
         band=band,
         info=info or {},
         max_real_uncertainty=lead_unc,
+    )
+
+
+def failed_result(reason: str, omega: float = float("nan")) -> FloquetResult:
+    """The verdict of a check that failed numerically: no exponent, undecided, and why in
+    ``info["error"]``.
+
+    >>> r = failed_result("ArpackNoConvergence: no convergence")
+    >>> r.decided, r.stable, r.info["error"]
+    (False, False, 'ArpackNoConvergence: no convergence')
+    """
+    return FloquetResult(
+        exponents=np.zeros(0, dtype=complex),
+        max_real=float("nan"),
+        stable=False,
+        marginal=False,
+        tol=float("nan"),
+        omega=omega,
+        converged=False,
+        method="failed",
+        complete=False,
+        info={"error": reason},
     )

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..budget import MemoryBudgetError, format_bytes, memory_budget
 from ..floquet import Continuation, dense_stability_harmonics, floquet, floquet_memory
+from ..floquet.result import NUMERICAL_FAILURES
 from ..harmonics.balance import HarmonicBalance, SingularBlockError
 from ..harmonics.sets import HarmonicSet, as_harmonic_set
 from ..system.periodic import PeriodicSystem
@@ -286,7 +287,7 @@ def _check_stability(
             raise
         sol.message += f"; stability not checked: {exc}"
         return sol
-    except (ArithmeticError, ValueError, RuntimeError, np.linalg.LinAlgError) as exc:
+    except NUMERICAL_FAILURES as exc:
         # a numerical failure of the check (a factorization, an eigensolver that did not
         # converge) leaves the verdict open; the solve itself stands
         sol.message += f"; stability not checked: {exc}"

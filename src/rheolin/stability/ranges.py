@@ -116,6 +116,8 @@ def refine_edge(
         count += 1
         if not res.decided:
             undecided += 1
+        if not np.isfinite(res.max_real):  # no verdict there (a numerical failure): stop
+            break
         if res.stable:
             a, side = x, -1
             if res.decided:

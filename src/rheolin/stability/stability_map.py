@@ -8,7 +8,9 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import ModelError
 from ..floquet import FloquetResult, floquet
+from ..floquet.result import NUMERICAL_FAILURES, failed_result
 from ..harmonics.sets import as_harmonic_set
 from .mechanism import (
     ASYMMETRY,
@@ -105,7 +107,8 @@ class StabilityMap:
     method
         Per speed: the Floquet method used (``"dense"``, ``"sparse"``, ``"lattice"``).
     info
-        Totals: Floquet evaluations, seconds, the largest lattice.
+        Totals: Floquet evaluations, seconds, the largest lattice; ``"failed"``: the speeds
+        whose check failed numerically (undecided) and why.
     state
         Per speed: ``"stable"``, ``"unstable"`` or ``"undecided"`` (the verdict is not
         decided: the truncation could still flip it, whichever side it leans to).
@@ -318,7 +321,13 @@ def stability_map(
     cont = Continuation()  # each speed's lattice searches start from the previous speed's
     results: list[FloquetResult] = []
     for i, W in enumerate(speeds):
-        results.append(evaluate(W, continuation=cont)[1])
+        try:
+            results.append(evaluate(W, continuation=cont)[1])
+        except ModelError:  # a refusal (the memory budget, a free body) is the caller's
+            raise
+        except NUMERICAL_FAILURES as exc:  # this speed undecided, with the reason
+            results.append(failed_result(f"{type(exc).__name__}: {exc}"))
+            cont.clear()
         if progress is not None:
             progress(i, results[-1])
     smap = map_from_results(
@@ -444,6 +453,13 @@ def map_from_results(
             (len(r.lattice) for r in results if r.lattice is not None), default=0
         ),
     }
+    failed = {
+        float(W): r.info["error"]
+        for W, r in zip(speeds, results, strict=True)
+        if r.method == "failed"
+    }
+    if failed:  # speeds whose check failed numerically: undecided, and why
+        smap.info["failed"] = failed
     return smap
 
 
@@ -478,6 +494,15 @@ def _edge(
     fixed = max(orders) if None not in orders else None  # type: ignore[type-var]
 
     def verdict(W: float) -> FloquetResult:
+        try:
+            return checked(W)
+        except ModelError:
+            raise
+        except NUMERICAL_FAILURES as exc:  # no verdict there: refine_edge stops at it
+            cont.clear()
+            return failed_result(f"{type(exc).__name__}: {exc}")
+
+    def checked(W: float) -> FloquetResult:
         count[0] += 1
         if fixed is None:  # the automatic verdict raises its own order where undecided
             return run(W, cont, float("inf"))[1]

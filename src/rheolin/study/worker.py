@@ -24,6 +24,7 @@ import xarray as xr
 from threadpoolctl import threadpool_limits
 
 from ..budget import MemoryBudgetError
+from ..errors import ModelError
 from ..harmonics.sets import TruncationWarning
 from ..io.loader import LoadedModel
 from .chunks import chunk_dataset, point_row
@@ -177,6 +178,7 @@ def _solve(
     """The point's row and its solution, from ``x0`` (the previous speed's solution, or
     None) with the Floquet ``continuation`` of its block."""
     from ..floquet import floquet
+    from ..floquet.result import NUMERICAL_FAILURES, failed_result
     from ..results.compute import solve_point
 
     p = solve_point(
@@ -197,6 +199,11 @@ def _solve(
             result = floquet(p.assembled.system, continuation=continuation)
         except MemoryBudgetError as exc:
             p.solution.message += f"; no Floquet result for the stability map: {exc}"
+        except ModelError:
+            raise
+        except NUMERICAL_FAILURES as exc:  # the verdict open, the steady state stands
+            p.solution.message += f"; no Floquet result for the stability map: {exc}"
+            result = failed_result(f"{type(exc).__name__}: {exc}")
     return point_row(p, result, time.perf_counter() - t0), p.solution
 
 
