@@ -306,3 +306,33 @@ def test_full_strategy_on_every_backend_matches_direct(backend: str, monkeypatch
     assert ref.success and sol.success, sol.message
     assert sol.info["strategy"] == "full" and sol.info["backend"] == backend
     assert _rel(sol.q, ref.q) < 1e-10
+
+
+@pytest.mark.parametrize("sweeps", [0, 8, 10**6])
+def test_support_strategy_by_solve_sweeps_then_g_matches_direct(sweeps: int, monkeypatch) -> None:
+    """Local time variation on 20 DOFs of an 80-DOF damped chain (the ``support`` strategy on
+    sparse LU factors): products by solve sweeps only, by ``G`` only, and both in one solve
+    (sweeps for the first five products, a quarter of the 20 support DOFs, then ``G``), each
+    against the assembled coupled system's sparse LU."""
+    import scipy.sparse as sps
+
+    from rheolin.solvers import krylov
+
+    monkeypatch.setattr(krylov, "SWEEPS_BEFORE_G", sweeps)
+    n = 80
+    main = 2.0 + np.linspace(0.0, 1.0, n)
+    K0 = sps.diags([-np.ones(n - 1), main, -np.ones(n - 1)], [-1, 0, 1]).tocsr()
+    local = np.zeros(n, dtype=complex)
+    local[30:50] = 0.4 * main[30:50]
+    K1 = sps.diags(local).tocsr()
+    M0, D0 = sps.identity(n, format="csr"), 0.03 * sps.identity(n, format="csr")
+    f = np.zeros(n, dtype=complex)
+    f[[3, 40, 77]] = [1.0, -0.5j, 0.3]
+    system = rl.PeriodicSystem(0.9, M={0: M0}, D={0: D0}, K={0: K0, 1: K1, -1: K1}, f={1: f})
+    H = rl.HarmonicSet.full(12)
+    ref = rl.solve(system, H, method="direct", stability=False)
+    sol = rl.solve(system, H, method="gmres", backend="lu", stability=False, rtol=1e-12)
+    assert ref.success and sol.success, sol.message
+    assert sol.info["strategy"] == "support" and sol.info["backend"] == "lu"
+    assert sol.iterations > 5  # the mixed case switches to G within the solve
+    assert _rel(sol.q, ref.q) < 1e-10

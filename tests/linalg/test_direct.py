@@ -8,10 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 import rheolin as rl
 from rheolin.budget import MemoryBudgetError
 from rheolin.linalg.direct import analyze, available_backends, resolve_backend
+from rheolin.linalg.direct.superlu import SPLU_OPTIONS
 from rheolin.linalg.pencil import Pencil
 from rheolin.linalg.store import FactorStore, analysis_for
 
@@ -101,6 +103,23 @@ def test_factors_beyond_the_budget_are_refactorized_with_the_same_answer() -> No
     assert "refactorized on demand" in tight.info["backend_note"]
     assert tight.info["refactorizations"] > 0
     assert _rel(tight.q, ref.q) < 1e-10
+
+
+def test_superlu_store_factor_falls_back_to_partial_pivoting_when_inaccurate() -> None:
+    # diagonal 0.1 passes the 0.1 pivot threshold, and its multipliers of 10 grow the last
+    # column by about 11^n: the diagonal-preferring factor fails the probe, partial pivoting not
+    n = 20
+    A = np.diag(np.full(n, 0.1)) - np.diag(np.ones(n - 1), -1)
+    A[:, -1] = 1.0
+    A[-1, -1] = 0.1
+    b = np.random.default_rng(3).standard_normal(n)
+    ref = np.linalg.solve(A, b)
+    first = spla.splu(sp.csc_array(A), **SPLU_OPTIONS).solve(b)
+    assert _rel(first, ref) > 1e-8  # the case the fallback is for
+    store = FactorStore(Pencil(sp.csc_array(A), None, None, 1.0), np.array([0]), "superlu")
+    out: list[np.ndarray] = []
+    store.use(0, lambda f: out.append(f.solve(b)))
+    assert _rel(out[0], ref) < 1e-13
 
 
 def test_an_oversized_problem_is_refused_before_allocation() -> None:

@@ -45,6 +45,7 @@ class _Coupling:
         n: int,
         skip_zero: bool = False,
     ) -> None:
+        self._iwh: tuple[float, np.ndarray] | None = None
         key = (
             row_h.tobytes(),
             col_h.tobytes(),
@@ -122,7 +123,10 @@ class _Coupling:
         return sp.csc_array((data, self.rows, self.indptr), shape=self.shape)
 
     def s(self, lam: complex, w: float) -> np.ndarray:
-        return lam + 1j * w * self.col_h
+        # i w h per entry is the same for every shift: made once per frequency
+        if self._iwh is None or self._iwh[0] != w:
+            self._iwh = (w, 1j * w * self.col_h)
+        return lam + self._iwh[1]
 
     def Q(self, lam: complex, w: float) -> sp.csc_array:
         """``K + s D + s^2 M`` with ``s = lam + i w h_col``."""

@@ -13,7 +13,8 @@ touches) and by what the system knows of its rotors:
   rows and columns of ``dA``, ``y - f`` lies in rows ``R``: ``y = f + P_R z`` and
   ``(I + dA_RC G) z = -dA_RC q0_C`` with ``G_n = A0(n)^-1[C, R]`` and ``q0 = A0^-1 f``.
   Its residual equals the true residual. ``G`` costs one ``|R|``-column solve per harmonic;
-  then each Krylov iteration is a small dense product, and a final sweep gives ``q``.
+  then each Krylov iteration is a small dense product, and a final sweep gives ``q``. The
+  first few products are solve sweeps instead (a warm start converges before ``G`` pays).
 * ``full`` (time variation over many DOFs): GMRES on the whole half vector; each iteration
   is one solve sweep and one convolution.
 * ``band`` (strong time variation over many DOFs: a non-axisymmetric shaft of 10-20 %
@@ -142,11 +143,43 @@ def _gmres_from(
     return _real_gmres(apply, rhs, weights, opts, scale, restart)
 
 
+#: GMRES on the support applies ``A0^-1`` by one sweep of solves (one right-hand side per
+#: harmonic) up to this many times before it makes ``G`` (``|R|`` right-hand sides per
+#: harmonic): a warm start from the previous speed of a sweep converges in a few iterations.
+SWEEPS_BEFORE_G = 8
+
+
+def _restricted(op: HarmonicBalance, rows: np.ndarray, cols: np.ndarray) -> Callable[..., Any]:
+    """``z_n -> A0(n)^-1[C, R] z_n``: by solve sweeps while they cost less than making ``G``
+    (sparse factors all held, at most :data:`SWEEPS_BEFORE_G` sweeps and a quarter of
+    ``|R|``), then by ``G``."""
+    inverse = op.inverse
+    store = getattr(inverse, "store", None)
+    limit = min(SWEEPS_BEFORE_G, rows.size // 4)
+    if inverse.name != "lu" or store is None or store.on_demand or limit < 1:
+        return op.restricted_solver(cols, rows)
+    made: list[Callable[[np.ndarray], np.ndarray]] = []
+    sweeps = 0
+
+    def apply(Z: np.ndarray) -> np.ndarray:
+        nonlocal sweeps
+        if not made and sweeps < limit:
+            sweeps += 1
+            Y = np.zeros((Z.shape[0], op.n_dof), dtype=complex)
+            Y[:, rows] = Z
+            return op.solve_A0(Y)[:, cols]
+        if not made:
+            made.append(op.restricted_solver(cols, rows))
+        return made[0](Z)
+
+    return apply
+
+
 def _support_step(op: HarmonicBalance, opts: Options) -> Step:
     """GMRES on the support of ``dA`` (see the module); returns ``F, x0 -> (Q, info, hist)``."""
     rows, cols = op.support
     weights = np.where(op.pos == 0, 1.0, 2.0)
-    G = op.restricted_solver(cols, rows)  # z_n -> A0(n)^-1[C, R] z_n
+    G = _restricted(op, rows, cols)  # z_n -> A0(n)^-1[C, R] z_n
 
     def reduced(Z: np.ndarray) -> np.ndarray:
         return Z + op.apply_dA_support(G(Z), rows, cols)

@@ -3,6 +3,7 @@ orders every factorization anew; it holds the GIL)."""
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
@@ -11,7 +12,7 @@ import scipy.sparse.linalg as spla
 
 from ..errors import SingularBlockError
 
-__all__ = ["SuperLUBackend", "splu_checked"]
+__all__ = ["SuperLUBackend", "probe_vector", "splu_checked"]
 
 #: SuperLU options for structurally symmetric structural matrices. Threshold pivoting that
 #: prefers the diagonal keeps the fill of the symmetric ordering; partial pivoting (SuperLU's
@@ -25,10 +26,23 @@ SPLU_OPTIONS: dict[str, Any] = {
 PIVOT_RTOL = 1e3 * np.finfo(float).eps
 
 
+@functools.lru_cache(maxsize=8)
+def probe_vector(n: int) -> np.ndarray:
+    """The fixed right-hand side (read-only) on which factors of size ``n`` are checked.
+
+    >>> v = probe_vector(3)
+    >>> v.shape, bool(np.array_equal(v, probe_vector(3))), v.flags.writeable
+    ((3,), True, False)
+    """
+    b = np.random.default_rng(n).standard_normal(n)
+    b.setflags(write=False)
+    return b
+
+
 def splu_checked(A: Any, n: int = -1) -> Any:
     """Sparse LU with diagonal-preferring pivoting, checked on a probe right-hand side;
     partial pivoting when that was inaccurate. Raises :class:`SingularBlockError`."""
-    b = np.random.default_rng(A.shape[0]).standard_normal(A.shape[0])
+    b = probe_vector(A.shape[0])
     lu = None
     for options in (SPLU_OPTIONS, {"permc_spec": "MMD_AT_PLUS_A"}):
         try:
