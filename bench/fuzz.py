@@ -67,6 +67,10 @@ class Tally:
         except AssertionError as exc:
             self.counts[kind]["VIOLATION"] += 1
             self.violations.append(f"{kind}: {exc!s:.400} | case: {case[:400]!r}")
+            print(f"VIOLATION {self.violations[-1]}", file=sys.stderr, flush=True)
+        done = sum(sum(c.values()) for c in self.counts.values())
+        if done % 500 == 0:  # a log to follow a long run, and to read if it is stopped
+            print(f"{done} cases, {time.process_time():.0f} CPU s", file=sys.stderr, flush=True)
         if seconds > self.slowest[kind][0]:
             self.slowest[kind] = (seconds, case[:200])
 
@@ -213,6 +217,7 @@ def main() -> None:
             fn()
             timing[name] = time.perf_counter() - t
     total = time.perf_counter() - t0
+    cpu = time.process_time()
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     per_element = element_memory()
     run = sum(sum(c.values()) for c in tally.counts.values())
@@ -220,7 +225,8 @@ def main() -> None:
         "# Fuzzing the whole surface (bench/fuzz.py)",
         "",
         f"`python bench/fuzz.py --models {a.models} --arguments {a.arguments} --surface "
-        f"{a.surface} --api {a.api} --semantic {a.semantic}`: {run} cases in {total:.0f} s, "
+        f"{a.surface} --api {a.api} --semantic {a.semantic}`: {run} cases in {total:.0f} s "
+        f"({cpu:.0f} CPU s), "
         f"peak RSS {rss:.0f} MB, hang threshold {a.hang:g} s (RHEOLIN_SOLVE_MEMORY and "
         "RHEOLIN_MEMORY_BUDGET 256 MB unless a case sets them)",
         "",
