@@ -81,8 +81,9 @@ def write_report_for(
             left_out=left_out,
         )
     console.print(f"wrote {escape(str(out))}", highlight=False)
-    for note in left_out:
-        err.print(f"warning: report: {note}", markup=False, highlight=False, soft_wrap=True)
+    for note in left_out:  # one line each (a reader's message may go on with links)
+        line = note.splitlines()[0] if note.strip() else note
+        err.print(f"warning: report: {line}", markup=False, highlight=False, soft_wrap=True)
     return out, left_out
 
 
