@@ -298,3 +298,24 @@ def test_report_of_result_files_rheolin_did_not_write_says_so_in_its_notes(invok
             assert any(needle in line for line in warned), (name, needle, res.stderr)
     assert json.loads((tmp_path / "typed" / "summary.json").read_text())["warnings"] == 3
     _refused(invoke("report", tmp_path / "typed", "--out", tmp_path), "--out", "directory")
+
+
+def test_a_rolling_bearing_with_a_billion_elements_is_refused_before_any_allocation(
+    invoke, tmp_path
+):
+    """`elements = 1000000000` (the preloaded example's ball bearing): each element is a row
+    of the law's arrays, 7.45 GiB of indices; refused by field in the file and by name in the
+    Python API, before any work, instead of a MemoryError or a hang."""
+    from rheolin.data import example_text
+    from rheolin.errors import ModelError
+
+    text = example_text("preloaded")
+    assert text.count("elements = 9") == 1
+    (tmp_path / "big.toml").write_text(text.replace("elements = 9", "elements = 1000000000"))
+    _refused(invoke("validate", tmp_path / "big.toml"),
+             "shafts[0].rolling_bearings[0].elements", "1000")  # fmt: skip
+    m = rl.Model()
+    m.add_rigid_body("r", (0, 0, 0), 1.0, (1e-3, 1e-3, 2e-3))
+    with pytest.raises(ModelError, match=r"`elements` must be an integer from 3 to 1000"):
+        m.add_rolling_bearing("A", "r", 0, kind="ball", stiffness=8e9, elements=10**9)
+    m.add_rolling_bearing("A", "r", 0, kind="ball", stiffness=8e9, elements=1000)  # the limit
