@@ -67,6 +67,10 @@ class Tally:
         except AssertionError as exc:
             self.counts[kind]["VIOLATION"] += 1
             self.violations.append(f"{kind}: {exc!s:.400} | case: {case[:400]!r}")
+            print(f"VIOLATION {self.violations[-1]}", file=sys.stderr, flush=True)
+        done = sum(sum(c.values()) for c in self.counts.values())
+        if done % 500 == 0:  # a log to follow a long run, and to read if it is stopped
+            print(f"{done} cases, {time.process_time():.0f} CPU s", file=sys.stderr, flush=True)
         if seconds > self.slowest[kind][0]:
             self.slowest[kind] = (seconds, case[:200])
 
@@ -205,14 +209,19 @@ def main() -> None:
 
     t0 = time.perf_counter()
     timing = {}
+    stopped = ""
     for name, fn, n in (("models", models, a.models), ("arguments", arguments, a.arguments),
                         ("surface", surface, a.surface), ("api", api, a.api),
                         ("semantic", semantic, a.semantic)):  # fmt: skip
-        if n:
+        if n and not stopped:
             t = time.perf_counter()
-            fn()
+            try:
+                fn()
+            except KeyboardInterrupt:  # a deadline (timeout -s INT): report what ran
+                stopped = f"Stopped by SIGINT during the {name} part; the counts are the cases run."
             timing[name] = time.perf_counter() - t
     total = time.perf_counter() - t0
+    cpu = time.process_time()
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     per_element = element_memory()
     run = sum(sum(c.values()) for c in tally.counts.values())
@@ -220,7 +229,8 @@ def main() -> None:
         "# Fuzzing the whole surface (bench/fuzz.py)",
         "",
         f"`python bench/fuzz.py --models {a.models} --arguments {a.arguments} --surface "
-        f"{a.surface} --api {a.api} --semantic {a.semantic}`: {run} cases in {total:.0f} s, "
+        f"{a.surface} --api {a.api} --semantic {a.semantic}`: {run} cases in {total:.0f} s "
+        f"({cpu:.0f} CPU s), "
         f"peak RSS {rss:.0f} MB, hang threshold {a.hang:g} s (RHEOLIN_SOLVE_MEMORY and "
         "RHEOLIN_MEMORY_BUDGET 256 MB unless a case sets them)",
         "",
@@ -238,6 +248,7 @@ def main() -> None:
     lines += [
         "",
         "Wall time per part: " + ", ".join(f"{k} {v:.0f} s" for k, v in timing.items()) + ".",
+        *(["", stopped] if stopped else []),
         "",
         f"Memory per shaft element of an assembled model (tracemalloc; the rotor example at "
         f"1,000 and 4,000 nodes): {per_element[0] / 1e3:.1f} kB kept, {per_element[1] / 1e3:.1f} "

@@ -104,3 +104,38 @@ def test_sweep_with_stability_off_never_reports_zero_unstable(invoke, tmp_path):
     lo, hi = table["unstable_ranges_rpm"][0]
     rpm = 30 / np.pi
     assert abs(lo / (100 * rpm) - 1) < 1e-4 and abs(hi / (110 * rpm) - 1) < 1e-4
+
+
+def test_exponents_on_the_axis_read_stable_whatever_side_round_off_puts_them():
+    """An undamped oscillator m x'' + k x = 0: its exponents are +-i sqrt(k / m) exactly, so
+    the verdict is stable and marginal; round-off puts the computed real part on either side
+    of zero and both read "stable". A real part c / (2 m) above the tolerance (negative
+    damping -c) reads "unstable", as FloquetResult.stable says."""
+    from dataclasses import replace
+
+    from rheolin.results import stability_text
+    from rheolin.results.dataset import leading_tolerance
+
+    m, k = 2.0, 8.0e4
+    system = rl.PeriodicSystem(30.0, M={0: np.array([[m]])}, K={0: np.array([[k]])})
+    res = rl.floquet(system, 2)
+    w0 = np.sqrt(k / m)
+    folded = abs(w0 - 30.0 * round(w0 / 30.0))  # +-i w0 folded into (-w1/2, w1/2]
+    np.testing.assert_allclose(np.abs(res.exponents.imag), folded, rtol=1e-9)
+    tol = leading_tolerance(res)
+    assert abs(res.max_real) <= tol < 1e-6 * w0
+    assert res.stable and res.decided and res.marginal
+    for real in (-0.5 * tol, 0.0, 0.5 * tol, tol):  # round-off of either sign, up to tol
+        moved = replace(res, exponents=res.exponents + (real - res.max_real), max_real=real)
+        assert leading_tolerance(moved) == tol
+        assert stability_text(True, True, real, tol) == "stable"
+    assert stability_text(True, True, 2 * tol, tol) == "undecided"
+    c = 1e-3 * 2 * m * w0
+    lively = rl.PeriodicSystem(30.0, M={0: np.array([[m]])}, D={0: np.array([[-c]])},
+                               K={0: np.array([[k]])})  # fmt: skip
+    grow = rl.floquet(lively, 2)
+    assert abs(grow.max_real - c / (2 * m)) < 1e-9 * w0  # lambda = c/2m +- i w0 sqrt(1-z^2)
+    assert not grow.stable
+    assert stability_text(grow.stable, grow.decided, grow.max_real, leading_tolerance(grow)) == (
+        "unstable"
+    )

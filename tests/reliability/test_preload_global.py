@@ -189,3 +189,44 @@ def test_a_torque_nothing_balances_is_said_in_newton_metres_with_the_torques() -
     assert held["load"] == pytest.approx(100.0 + (-200.0) * (-z1 / z2), rel=1e-9)
     (note,) = op.notes()
     assert "180 N m at body 'p'" in note and "in 100 N m, out -200 N m" in note
+
+
+def test_a_bearing_far_too_soft_for_its_load_is_refused_with_the_load_of_the_static_balance():
+    """The preloaded example's roller bearing 'pB' with stiffness 1 N/m^(10/9) instead of
+    1.5e9 (a case bench/fuzz.py found refused as "Newton did not converge"). The pinion shaft
+    rests on 'pA' and 'pB' with its disk half-way, so the moment balance about 'pA' fixes the
+    load of 'pB' whatever the stiffnesses: half of the mesh force F_n = T / r_b1 (along the
+    line of action at the operating pressure angle, cos a' = (r_b1 + r_b2) / 147 mm) plus
+    the shaft's weight (disk and shaft, steel 7850 kg/m^3). The example finds that load; the
+    soft bearing would need (766 N / K)^(9/10) = 391 m of deflection, far beyond 1 % of the
+    model (1.47 mm), where its law gives K (1.47 mm)^(10/9): no equilibrium exists, and the
+    refusal names 'pB' and that load in N."""
+    import math
+    import re
+    import tomllib
+
+    import tomli_w
+
+    from rheolin.data import example_text
+    from rheolin.io import parse_model
+
+    g, rho, alpha = 9.81, 7850.0, math.radians(20.0)
+    weight = rho * math.pi * (0.042**2 * 0.020 + 0.015**2 * 0.080) * g
+    r_b1, r_b2 = 0.042 * math.cos(alpha), 0.104 * math.cos(alpha)
+    Fn, a_op = 60.0 / r_b1, math.acos((r_b1 + r_b2) / 0.147)
+    load = 0.5 * math.sqrt(Fn**2 + weight**2 + 2 * Fn * weight * math.cos(a_op))
+
+    doc = tomllib.loads(example_text("preloaded"))
+    speed = 1000 * math.pi / 30
+    op = parse_model(tomli_w.dumps(doc)).model.operating_point(speed)
+    assert op.bearings["pB"].load == pytest.approx(load, rel=1e-9)
+    doc["shafts"][0]["rolling_bearings"][1]["stiffness"] = 1
+    with pytest.raises(ModelError) as info:
+        parse_model(tomli_w.dumps(doc)).model.operating_point(speed)
+    text = str(info.value)
+    found = re.search(r"does not exist.*bearing 'pB' would carry ([\d.e+]+) N, but its law "
+                      r"gives ([\d.e+-]+) N at 1\.47 mm", text)  # fmt: skip
+    assert found, text
+    assert float(found[1]) == pytest.approx(load, rel=1e-3)  # printed to 4 digits
+    assert float(found[2]) == pytest.approx(1.0 * 1.47e-3 ** (10 / 9), rel=1e-3)
+    assert (load / 1.0) ** 0.9 > 100.0  # the deflection the balance needs [m]

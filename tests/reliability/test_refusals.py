@@ -267,8 +267,10 @@ def test_a_sweep_whose_every_point_fails_ends_honestly_with_its_files(invoke, ro
 
 def test_report_of_result_files_rheolin_did_not_write_says_so_in_its_notes(invoke, tmp_path):
     """Tables of the wrong shape or types, nesting beyond the reader and netCDF files of
-    another program under result names: the report is written and its first section names
-    each file it could not use (exit 0, never 3); ``--out`` naming a directory is refused."""
+    another program under result names: the report is written, its first section and one
+    warning line on stderr each name the file it could not use and why, and the exit code is
+    1 (docs/cli.md; never 3); ``--out`` naming a directory is refused. The directory of a
+    real run is reported with exit 0 and no warning."""
     import html
     import json
     import re
@@ -287,10 +289,33 @@ def test_report_of_result_files_rheolin_did_not_write_says_so_in_its_notes(invok
     }
     for name, needles in expected.items():
         res = invoke("report", tmp_path / name)
-        assert res.exit_code == 0 and "internal error" not in res.stderr, (name, res.stderr)
+        assert res.exit_code == 1 and "internal error" not in res.stderr, (name, res.stderr)
         page = (tmp_path / name / "report.html").read_text()
         notes = html.unescape(re.search(r'<section id="notes">(.*?)</section>', page, re.S)[1])
+        warned = [ln for ln in res.stderr.splitlines() if ln.startswith("warning: report: ")]
         for needle in needles:
             assert needle in notes, (name, needle, notes)
+            assert any(needle in line for line in warned), (name, needle, res.stderr)
     assert json.loads((tmp_path / "typed" / "summary.json").read_text())["warnings"] == 3
     _refused(invoke("report", tmp_path / "typed", "--out", tmp_path), "--out", "directory")
+
+
+def test_a_rolling_bearing_with_a_billion_elements_is_refused_before_any_allocation(
+    invoke, tmp_path
+):
+    """`elements = 1000000000` (the preloaded example's ball bearing): each element is a row
+    of the law's arrays, 7.45 GiB of indices; refused by field in the file and by name in the
+    Python API, before any work, instead of a MemoryError or a hang."""
+    from rheolin.data import example_text
+    from rheolin.errors import ModelError
+
+    text = example_text("preloaded")
+    assert text.count("elements = 9") == 1
+    (tmp_path / "big.toml").write_text(text.replace("elements = 9", "elements = 1000000000"))
+    _refused(invoke("validate", tmp_path / "big.toml"),
+             "shafts[0].rolling_bearings[0].elements", "1000")  # fmt: skip
+    m = rl.Model()
+    m.add_rigid_body("r", (0, 0, 0), 1.0, (1e-3, 1e-3, 2e-3))
+    with pytest.raises(ModelError, match=r"`elements` must be an integer from 3 to 1000"):
+        m.add_rolling_bearing("A", "r", 0, kind="ball", stiffness=8e9, elements=10**9)
+    m.add_rolling_bearing("A", "r", 0, kind="ball", stiffness=8e9, elements=1000)  # the limit

@@ -9,6 +9,7 @@ import typer
 from rich.markup import escape
 
 from .common import console, fail
+from .errors import EXIT_FAILED, err
 from .progress import working
 
 __all__ = ["parse_operating", "register", "report", "write_report_for"]
@@ -60,19 +61,30 @@ def write_report_for(
     operating: tuple[float, float] | None = None,
     nodes: bool = False,
     path: Path | None = None,
-) -> Path:
-    """Write the report of ``directory`` and say where (``--report`` and ``rheolin report``)."""
+) -> tuple[Path, list[str]]:
+    """Write the report of ``directory`` and say where (``--report`` and ``rheolin report``);
+    each part left out is warned of on stderr, naming the file and why. Returns the report's
+    path and those lines."""
     from ..io.outdir import check_output_dir
     from ..report import write_report
 
     target = Path(path) if path is not None else Path(directory) / "report.html"
     check_output_dir(target.parent, "--out")
+    left_out: list[str] = []
     with working(f"report of {directory}"):
         out = write_report(
-            directory, model=model, operating_rpm=operating, nodes=nodes, path=target
+            directory,
+            model=model,
+            operating_rpm=operating,
+            nodes=nodes,
+            path=target,
+            left_out=left_out,
         )
     console.print(f"wrote {escape(str(out))}", highlight=False)
-    return out
+    for note in left_out:  # one line each (a reader's message may go on with links)
+        line = note.splitlines()[0] if note.strip() else note
+        err.print(f"warning: report: {line}", markup=False, highlight=False, soft_wrap=True)
+    return out, left_out
 
 
 def report(
@@ -95,7 +107,9 @@ def report(
         raise fail(f"--model: {str(model)!r} is not a file")
     if out is not None and out.is_dir():
         raise fail(f"--out: {str(out)!r} is a directory; give an HTML file name")
-    write_report_for(directory, model, parse_operating(operating), nodes, out)
+    _, left_out = write_report_for(directory, model, parse_operating(operating), nodes, out)
+    if left_out:  # the report is written but incomplete: docs/cli.md, exit codes
+        raise typer.Exit(EXIT_FAILED)
 
 
 def register(app: typer.Typer) -> None:

@@ -15,6 +15,7 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from ..mechanics.rolling import MAX_ELEMENTS
 from ..mechanics.sections import MATERIALS
 from .planetary import Planetary
 from .quantities import (
@@ -217,7 +218,7 @@ class RollingBearing(_Strict):
     law: Literal["elements", "radial", "table"] = "elements"
     kind: Literal["ball", "roller"] = "ball"
     stiffness: Raw | None = None
-    elements: int = Field(default=0, ge=0, strict=True)
+    elements: int = Field(default=0, ge=0, le=MAX_ELEMENTS, strict=True)
     clearance: LengthNonNeg = 0.0
     angle: Angle = 0.0
     deflection: VecLengthNonNeg | None = None

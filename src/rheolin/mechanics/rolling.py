@@ -37,7 +37,11 @@ from scipy.interpolate import PchipInterpolator
 
 from ..errors import ModelError
 
-__all__ = ["EXPONENTS", "MeshLoadLaw", "RollingLaw", "rolling_record"]
+__all__ = ["EXPONENTS", "MAX_ELEMENTS", "MeshLoadLaw", "RollingLaw", "rolling_record"]
+
+#: Rolling elements of one bearing: a large slewing ring has a few hundred (each element is a
+#: row of the law's arrays, so a mistyped count would be refused only by the memory).
+MAX_ELEMENTS = 1000
 
 #: Load-deflection exponents of one rolling element: point contact (ball), line contact
 #: (roller, Palmgren's 10/9).
@@ -121,9 +125,11 @@ class RollingLaw:
             raise ModelError(f"`clearance` must be >= 0 [m], got {self.clearance!r}")
         if self.law == "elements" and (
             isinstance(self.elements, bool) or int(self.elements) != self.elements
-            or self.elements < 3
+            or not 3 <= self.elements <= MAX_ELEMENTS
         ):  # fmt: skip
-            raise ModelError(f"`elements` must be an integer >= 3, got {self.elements!r}")
+            raise ModelError(
+                f"`elements` must be an integer from 3 to {MAX_ELEMENTS}, got {self.elements!r}"
+            )
 
     @property
     def exponent(self) -> float:

@@ -388,7 +388,7 @@ def _guarded(page: Page, d: ResultDirectory, build: Any, *args: Any) -> None:
         del page.sections[before:]
         what = build.__name__.strip("_").removesuffix("_sections").removesuffix("_section")
         files = ", ".join([*d.tables, *d.datasets])
-        d.notes.append(
+        d.leave_out(
             f"the {what} part of the report is left out: the result files ({files}) are not "
             f"as rheolin writes them ({type(exc).__name__}: {exc})"
         )
@@ -402,13 +402,17 @@ def write_report(
     nodes: bool = False,
     path: str | Path | None = None,
     where: str | None = None,
+    left_out: list[str] | None = None,
 ) -> Path:
     """Write ``directory/report.html`` (or ``path``) atomically; returns its path. ``where``:
     the directory's name in the title (a command writing into a staging directory gives
-    the final one)."""
+    the final one); ``left_out``: a list that receives one line per part of the report left
+    out (a result file that could not be used, and why)."""
     d = read_directory(directory, model)
     text = build_report(d, operating_rpm, nodes, where)
     out = Path(path) if path is not None else Path(directory) / REPORT_FILE
     with atomic_write(out) as tmp:
         tmp.write_text(text, encoding="utf-8")
+    if left_out is not None:
+        left_out.extend(d.left_out)
     return out

@@ -36,7 +36,9 @@ FILES = {
 
 @dataclass
 class ResultDirectory:
-    """The files of one result directory, read back (missing ones None)."""
+    """The files of one result directory, read back (missing ones None). ``notes``: what the
+    report says first; ``left_out``: those of them that leave a part of the report out (a
+    result file not used, and why), which ``rheolin report`` also warns of on the console."""
 
     path: Path
     datasets: dict[str, xr.Dataset] = field(default_factory=dict)
@@ -46,6 +48,12 @@ class ResultDirectory:
     model_path: Path | None = None
     model_sha256: str = ""
     notes: list[str] = field(default_factory=list)
+    left_out: list[str] = field(default_factory=list)
+
+    def leave_out(self, note: str) -> None:
+        """Say in the notes that a part is left out, and why."""
+        self.notes.append(note)
+        self.left_out.append(note)
 
     @property
     def kinds(self) -> list[str]:
@@ -136,7 +144,7 @@ def read_directory(path: str | Path, model: str | Path | None = None) -> ResultD
                 with xr.open_dataset(p) as ds:
                     d.datasets[name] = ds.load()
         except (OSError, ValueError, RecursionError) as exc:  # not a file rheolin wrote
-            d.notes.append(f"{name} could not be read: {exc}")
+            d.leave_out(f"{name} could not be read: {exc}")
     _in_file_units(d)
     for p in sorted(d.path.glob("*.png")):
         d.images[p.name] = p.read_bytes()

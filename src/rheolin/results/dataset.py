@@ -32,6 +32,7 @@ __all__ = [
     "complex_values",
     "floquet_attrs",
     "frequency_markers",
+    "leading_tolerance",
     "netcdf_engine",
     "orbit_frequencies",
     "point_dataset",
@@ -66,25 +67,43 @@ def floquet_attrs(sol: Solution) -> dict[str, Any]:
 
 
 def stability_text(
-    stable: bool | None, decided: bool | None = None, max_real: float | None = None
+    stable: bool | None,
+    decided: bool | None = None,
+    max_real: float | None = None,
+    tol: float | None = None,
 ) -> str:
     """``"stable"``, ``"unstable"``, ``"undecided"`` or ``"not checked"``.
 
     A "stable" verdict is reported ``"undecided"`` when the truncation could still flip it
-    (``decided`` False) or when the largest Floquet real part is positive (inside its
-    tolerance, e.g. at an absurd speed where the tolerance grows with the frequencies): a
-    positive real part is never reported as stable.
+    (``decided`` False), or when the largest Floquet real part is positive and no tolerance
+    ``tol`` [1/s] of that exponent is given, or it lies above it. A decided stable verdict
+    whose largest real part is zero within ``tol`` (an undamped motion; round-off puts it
+    on either side of the axis) is ``"stable"``: marginal, as ``FloquetResult.marginal``
+    says, and the console's stability line says so.
 
     >>> stability_text(True), stability_text(True, max_real=1e-3), stability_text(None)
     ('stable', 'undecided', 'not checked')
+    >>> stability_text(True, True, 5.8e-16, tol=1e-9), stability_text(True, True, 2e-9, 1e-9)
+    ('stable', 'undecided')
     """
     if stable is None:
         return "not checked"
     if not stable:
         return "unstable"
-    if decided is False or (max_real is not None and max_real > 0):
+    if decided is False:
+        return "undecided"
+    if max_real is not None and max_real > 0 and (tol is None or not max_real <= tol):
         return "undecided"
     return "stable"
+
+
+def leading_tolerance(res: Any) -> float:
+    """The tolerance [1/s] of the exponent with the largest real part (``res.tol`` when the
+    per-exponent tolerances were not kept)."""
+    lam, tol = np.asarray(res.exponents), np.asarray(res.tolerances)
+    if lam.size and tol.size == lam.size:
+        return float(tol[int(np.argmax(lam.real))])
+    return float(res.tol)
 
 
 def _parts(z: np.ndarray) -> np.ndarray:
@@ -216,6 +235,7 @@ def point_dataset(
                 sol.stable,
                 None if sol.floquet is None else bool(sol.floquet.decided),
                 sol.max_floquet_real,
+                None if sol.floquet is None else leading_tolerance(sol.floquet),
             ),
             "max_floquet_real": float("nan")
             if sol.max_floquet_real is None

@@ -277,8 +277,10 @@ class StaticEquilibrium:
 
     def equilibrium(self) -> tuple[np.ndarray, int, int]:
         """The reduced equilibrium ``y`` under the whole load by the globalized Newton method
-        (:mod:`.newton`), from rest; should it stall, by continuation over the load factor
-        (:data:`LOAD_STEPS`). Returns ``y``, the Newton iterations and the load steps."""
+        (:mod:`.newton`), from rest; should it stall or find the load uncarried along a search
+        direction, by continuation over the load factor (:data:`LOAD_STEPS`). A refusal names
+        the uncarried joint and its load (the first found) or else the out-of-balance force.
+        Returns ``y``, the Newton iterations and the load steps."""
         self._reduced_operators()
         size = checks.model_size(self.model)
         reach = SEARCH_REACH * (checks.MAX_DEFLECTION * size if size > 0 else 1e-3)
@@ -290,6 +292,8 @@ class StaticEquilibrium:
         y = np.zeros(self.T.shape[1])
         iterations = 0
         steps: tuple[float, ...] = (1.0,)
+        unbounded = ""
+        out = None
         for attempt in range(2):
             for k, lam in enumerate(steps):
                 try:
@@ -302,13 +306,13 @@ class StaticEquilibrium:
                         too_far,
                     )
                 except Unbounded as exc:
+                    # one search direction: the continuation below may still find a balance
                     u, d = np.asarray(self.T @ exc.y), np.asarray(self.T @ exc.direction)
-                    raise ModelError(
-                        checks.unbounded(
-                            self.bearings, self.meshes, u, d, lam * self.f0,
-                            reach / SEARCH_REACH,
-                        )
-                    ) from None  # fmt: skip
+                    unbounded = unbounded or checks.unbounded(
+                        self.bearings, self.meshes, u, d, self.f0, reach / SEARCH_REACH
+                    )  # the first found, with the whole load
+                    out = None
+                    break
                 iterations += out.iterations
                 if not out.converged:
                     break
@@ -317,6 +321,9 @@ class StaticEquilibrium:
                     return y, iterations, len(steps)
             if attempt == 0:
                 y, steps = np.zeros_like(y), LOAD_STEPS
+        if unbounded:
+            raise ModelError(unbounded)
+        assert out is not None
         u = np.asarray(self.T @ out.y)
         raise ModelError(
             checks.stalled(self.bearings, self.meshes, u, self.force_residual(u), self.a.dof_labels)

@@ -12,7 +12,9 @@ a line search on ``|r|`` sees no descent. This method therefore
    the linear part and of every joint: nonsingular once the free rigid-body motions are
    held), with ``mu = 0`` where ``J`` is regular and growing until ``d`` descends
    (``d^T r < 0``) and stays within a plausible deflection (a larger step comes from a
-   nearly singular tangent, and its direction from round-off);
+   nearly singular tangent, and its direction from round-off); when even the largest ``mu``
+   leaves that range, the step of the largest ``mu`` is searched (a joint that carries
+   almost nothing: the search reports it);
 2. searches along ``d`` for the minimum of the energy, the root of the directional
    derivative ``g(a) = d^T r(y + a d)`` (nondecreasing for a monotone ``r``): the full
    Newton step when it reduces ``|W r|``, else a bracket grown by factors of 4 and
@@ -116,16 +118,23 @@ def minimize(
         tol = tolerance(y, J)
         if nr <= tol:
             return Outcome(y, True, it - 1, nr, tol)
-        step = None
+        step, steepest = None, None
         for mu in _MU:
             d = _factor_solve(J if mu == 0.0 else J + mu * S, r)
+            if d is None or not float(d @ r) < 0.0:
+                continue
+            steepest = (mu, d)
             # a step past any plausible deflection comes from a (nearly) singular tangent:
             # its direction is round-off, so it is regularized further
-            if d is not None and float(d @ r) < 0.0 and not too_far(y + d):
+            if not too_far(y + d):
                 step = (mu, d)
                 break
         if step is None:
-            return Outcome(y, False, it, nr, tol)
+            if steepest is None:
+                return Outcome(y, False, it, nr, tol)
+            # even the most regularized step leaves the plausible range: a load that (almost)
+            # nothing carries; the search along it says whether the energy still falls there
+            step = steepest
         mu, d = step
         y_new = _search(residual, y, r, nr, d, weight, newton=mu == 0.0, too_far=too_far)
         if y_new is None:
