@@ -10,7 +10,6 @@ rows), until its stated uncertainty meets ``rtol |max_real|``.
 
 from __future__ import annotations
 
-import copy
 from typing import Any
 
 import numpy as np
@@ -18,7 +17,7 @@ import numpy as np
 from ..budget import memory_budget as resolve_budget
 from ..harmonics.lattice import Lattice, harmonic_lattice
 from ..system.periodic import PeriodicSystem
-from .confirm import confirm_unresolved
+from .confirm import confirm_unresolved, snapshot
 from .outcome import LatticeExponents
 from .result import SAFETY
 from .search import lattice_memory
@@ -105,7 +104,7 @@ def refine_leading(
         if finer is None or lattice_memory(system, finer) > limit:
             break
         previous = continuation.start(n, finer) if continuation is not None else None
-        before = _snapshot(out)
+        before = snapshot(out)
         out, fine = confirm_unresolved(system, out, finer, previous, todo=todo)
         out.info.pop("confirmed", None)
         info["orders"].append(order)
@@ -115,15 +114,6 @@ def refine_leading(
         if leading_uncertainty(out, j) >= unc:  # not better: keep the coarse exponents
             out = before
     return out, info
-
-
-def _snapshot(out: LatticeExponents) -> LatticeExponents:
-    """A copy of ``out`` that a confirmation does not change (it replaces the arrays)."""
-    kept = copy.copy(out)
-    kept.info = dict(out.info)
-    kept.certified = out.certified.copy()
-    kept.uncertainty = out.uncertainty.copy()
-    return kept
 
 
 def _cluster_rows(out: LatticeExponents, row: int, w: float) -> np.ndarray:

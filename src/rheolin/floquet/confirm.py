@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from ..harmonics.lattice import Lattice
@@ -12,7 +14,7 @@ from .result import TRUNCATION_SAFETY
 from .search import lattice_exponents
 from .select import CLUSTER_TOL
 
-__all__ = ["confirm_unresolved"]
+__all__ = ["confirm_unresolved", "snapshot"]
 
 
 def confirm_unresolved(
@@ -42,7 +44,54 @@ def confirm_unresolved(
 
     ``todo``: a mask of rows to search again instead (:func:`~rheolin.floquet.accuracy.
     refine_leading`: the leading exponent's cluster, resolved, for its accuracy).
+
+    A search started from the previous speed that leaves a cluster unresolved or short (its
+    eigenvectors led Arnoldi to the copies of the previous speed, not to this speed's
+    mixed pair: the gear variant inside its principal resonance) is made again from this
+    speed's coarse eigenvectors, as without a ``previous``, and that outcome is kept when it
+    settles every cluster (``info["confirmed"]["retried"]``; otherwise the continued one,
+    which the next speed starts from).
     """
+    if previous is None or todo is not None:
+        return _confirm(system, out, finer, previous, todo)
+    before = snapshot(out)
+    got, fine = _confirm(system, out, finer, previous, None)
+    left = _open(got)
+    if left == (0, 0):
+        return got, fine
+    again, fine_again = _confirm(system, before, finer, None, None)
+    if _open(again) == (0, 0):
+        again.info["confirmed"]["retried"] = True
+        return again, fine_again
+    got.info["confirmed"]["retried"] = False
+    return got, fine
+
+
+def _open(out: LatticeExponents) -> tuple[int, int]:
+    """What is left open: exponents missing (no finer lattice looks for them again), then
+    unresolved, uncertified ones (a finer lattice may settle them)."""
+    missing = max(out.expected - out.exponents.size, 0)
+    return missing, int(np.sum(out.unresolved & ~out.certified))
+
+
+def snapshot(out: LatticeExponents) -> LatticeExponents:
+    """A copy of ``out`` that a confirmation does not change (it replaces the arrays, and
+    marks ``certified`` and ``uncertainty`` in place)."""
+    kept = copy.copy(out)
+    kept.info = dict(out.info)
+    kept.certified = out.certified.copy()
+    kept.uncertainty = out.uncertainty.copy()
+    return kept
+
+
+def _confirm(
+    system: PeriodicSystem,
+    out: LatticeExponents,
+    finer: Lattice,
+    previous: LatticeExponents | None,
+    todo: np.ndarray | None,
+) -> tuple[LatticeExponents, LatticeExponents | None]:
+    """:func:`confirm_unresolved` from one start."""
     if todo is None:
         todo = out.unresolved & ~out.certified
     if not todo.any():
