@@ -202,30 +202,40 @@ def band_modes(
     k = BAND_MODES if modes is None else int(modes)
     while True:
         band = BandAveraged(system, k)
-        band.complement = certify(system, band)
-        c = band.complement
         bigger = 2 * k
-        fits = budget is None or band_memory(system, bigger) <= budget
-        if (
+        last = (
             modes is not None
-            or (c.certified and c.kappa <= KAPPA_LIMIT and not c.energy_note.startswith("K_s"))
             or bigger > min(BAND_MAX_MODES, 2 * system.n - 2)
-            or not fits
+            or not (budget is None or band_memory(system, bigger) <= budget)
+        )
+        # a band that will be enlarged anyway once kappa_C passes KAPPA_LIMIT stops there
+        band.complement = certify(system, band, 1.0 if last else KAPPA_LIMIT)
+        c = band.complement
+        if last or (
+            c.certified and c.kappa <= KAPPA_LIMIT and not c.energy_note.startswith("K_s")
         ):
             return band
         k = bigger
 
 
-def certify(system: PeriodicSystem, band: BandAveraged) -> Complement:
+def certify(system: PeriodicSystem, band: BandAveraged, stop: float = 1.0) -> Complement:
     """The small-gain scan up to the pencil's largest frequency (a norm bound), which
     certifies the band, and the energy bound at the band's radius, reported with it (the
-    time-averaged eigenvalues of modes the time variation does not touch at all)."""
+    time-averaged eigenvalues of modes the time variation does not touch at all). The scan
+    ends at the first point where ``kappa_C >= stop`` (``stop <= 1``); the band is then not
+    certified."""
     ok, why = energy_certificate(system, band.radius)
     scan = Scan(system, band)
-    out = scan.run(_top_frequency(system, band))
+    out = scan.run(_top_frequency(system, band), min(stop, 1.0))
     out.radius = band.radius
     out.energy, out.energy_note = ok, why
-    if not out.kappa < 1.0:
+    if not out.complete and out.kappa < 1.0:
+        out.certified = False
+        out.reason = (
+            f"the small-gain bound reached {out.kappa:.3g} at {out.at:.4g} rad/s, above "
+            f"{KAPPA_LIMIT}: a larger band is tried"
+        )
+    elif not out.kappa < 1.0:
         out.certified = False
         out.reason = (
             f"a mode outside the band couples to the time variation more than its damping "
