@@ -406,9 +406,13 @@ class Scan:
         # each band mode's coupling into the touched DOFs' forces: ||w_j^H J E_k|| summed
         Wf = self.Wf
         p = np.zeros(band.lam.size)
-        for k in self.E:
-            for j in range(band.lam.size):
-                E = self.coupling(k, band.lam[j] - 1j * k * self.w)
-                p[j] += float(np.linalg.norm(Wf[:, j].conj() @ E))
+        WfH = Wf.conj().T
+        for k, parts in self.E.items():
+            # rows j of w_j^H [K_k, D_k + s_j M_k] with s_j = lam_j - i k w1, all j at once
+            Kp, Dp, Mp = (None if x is None else np.asarray((x.T @ WfH.T).T) for x in parts)
+            sj = (band.lam - 1j * k * self.w)[:, None]
+            rows_q = 0.0 if Kp is None else np.abs(Kp) ** 2
+            rows_v = (0.0 if Dp is None else Dp) + (0.0 if Mp is None else sj * Mp)
+            p += np.sqrt(np.sum(rows_q + np.abs(rows_v) ** 2, axis=1))
         out.p = p
         return out

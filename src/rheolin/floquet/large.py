@@ -102,6 +102,7 @@ def band_info(modes: Any, rotated: list[str]) -> dict[str, Any]:
         "modes": int(modes.lam.size),
         "radius": modes.radius,
         "frames": list(rotated),
+        "cpu": dict(modes.cpu),
     }
     if modes.complement is not None:
         out.update(modes.complement.summary())
