@@ -1,10 +1,12 @@
 """Floquet verdicts of models past the dense limit (the band method, docs/stability.md
 section 8) beside their steady-state solve, in one process (not a test).
 
-Rows, each a model at one speed: the solve (``solve_point``, stability off, the file's
-harmonics or ``--order``/``--max-order``) and the verdict (``rl.floquet`` of the assembled
-system, default options), wall and CPU seconds, their ratio, the verdict, the band (modes,
-``kappa_C``), and the verdict's peak resident memory above the process.
+Rows, each a model at one speed: the assembly, the solve (``solve_point``, stability off,
+the file's harmonics or ``--order``/``--max-order``) and the verdict (``rl.floquet`` of the
+assembled system, default options), wall and CPU seconds, the verdict's stages (the band's
+Arnoldi runs, the small-gain scans, the lattice search: the rest), the CPU ratio verdict /
+solve, the verdict, the band (modes, ``kappa_C``), and the peak resident memory above the
+process of the solve and of the verdict (blank stages: the dense method, below the band).
 
 * the example rotor on ``--rotor`` shaft nodes (``6 N`` DOF) at 3000 and 4220 rpm;
 * the gearbox with every shaft element split (``--gearbox`` DOFs, rheolin.data.fine);
@@ -55,18 +57,23 @@ def row(name: str, text: str, rpm: float, order: int | None, max_order: float | 
     h = lm.spec.harmonics
     o = h.order if order is None else order
     mo = h.max_order if max_order is None else max_order
-    point, s_wall, s_cpu, _ = timed(
+    _, _, a_cpu, _ = timed(lambda: model.speed_template().assemble(rpm * RPM))
+    point, s_wall, s_cpu, s_peak = timed(
         lambda: solve_point(model, rpm * RPM, order=o, max_order=mo, stability=False)
     )
     system = point.assembled.system
     res, f_wall, f_cpu, peak = timed(lambda: rl.floquet(system))
     band = res.info.get("band") or {}
+    stages = band.get("cpu") or {}
+    arnoldi, scan = stages.get("arnoldi", float("nan")), stages.get("scan", float("nan"))
+    search = f_cpu - (arnoldi + scan if stages else 0.0)
     verdict = ("stable" if res.stable else "unstable") + ("" if res.decided else ", undecided")
     line = (
-        f"| {name} | {system.n:,} | {rpm:g} | {s_wall:.2f} / {s_cpu:.2f} | "
-        f"{f_wall:.2f} / {f_cpu:.2f} | {f_cpu / max(s_cpu, 1e-9):.2f} | {verdict} | "
-        f"{res.max_real:.6g} | {band.get('modes', '-')} | {band.get('kappa', float('nan')):.3g} | "
-        f"{peak:.0f} |"
+        f"| {name} | {system.n:,} | {rpm:g} | {a_cpu:.2f} | {s_wall:.2f} / {s_cpu:.2f} | "
+        f"{f_wall:.2f} / {f_cpu:.2f} | {arnoldi:.2f} | {scan:.2f} | {search:.2f} | "
+        f"{f_cpu / max(s_cpu, 1e-9):.2f} | {verdict} | {res.max_real:.6g} | "
+        f"{band.get('modes', '-')} | {band.get('kappa', float('nan')):.3g} | "
+        f"{s_peak:.0f} | {peak:.0f} |"
     )
     print(line, flush=True)
     return line
@@ -106,34 +113,43 @@ def main() -> None:
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
     head = (
-        "| model | DOF | rpm | solve s (wall / CPU) | verdict s (wall / CPU) | CPU ratio | "
-        "verdict | largest real part 1/s | band modes | kappa_C | verdict peak MB |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|\n"
+        "| model | DOF | rpm | assembly CPU s | solve s (wall / CPU) | verdict s (wall / CPU) | "
+        "band Arnoldi CPU s | scan CPU s | lattice search CPU s | CPU ratio | verdict | "
+        "largest real part 1/s | band modes | kappa_C | solve peak MB | verdict peak MB |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
     )
     print(head, end="")
-    rows = []
+    command = "OPENBLAS_NUM_THREADS=1 python bench/large_stability.py " + " ".join(sys.argv[1:])
+    rows: list[str] = []
+
+    def write(tail: str = "") -> str:
+        """The results so far (written after every row: a run cut short keeps its rows)."""
+        text = (
+            "# Floquet verdicts past the dense limit\n\n"
+            f"`{command}`, one process on a shared 2-core machine (wall times vary with the "
+            "load; CPU times are this process's).\n\n" + head + "\n".join(rows) + "\n\n" + tail
+        )
+        if args.out:
+            Path(args.out).write_text(text)
+        return text
+
     for nodes in args.rotor:
         for rpm in (3000.0, 4220.0):
             rows.append(
                 row(f"rotor, {nodes} nodes", refined_example("rotor", nodes), rpm, None, None)
             )
+            write()
     for dof in args.gearbox:
         text = refined_example("gearbox", dof=dof)
         for rpm in args.gearbox_speeds:
             rows.append(row("gearbox, fine shafts", text, rpm, args.order, args.max_order))
+            write()
     tail = ""
     if args.runup and args.gearbox:
         speeds = np.linspace(1000.0, 5000.0, args.runup)
         tail = runup(refined_example("gearbox", dof=args.gearbox[0]), speeds)
-    command = "OPENBLAS_NUM_THREADS=1 python bench/large_stability.py " + " ".join(sys.argv[1:])
-    text = (
-        "# Floquet verdicts past the dense limit\n\n"
-        f"`{command}`, one process on a shared 2-core machine (wall times vary with the load;"
-        " CPU times are this process's).\n\n" + head + "\n".join(rows) + "\n\n" + tail
-    )
-    print(text)
+    print(write(tail))
     if args.out:
-        Path(args.out).write_text(text)
         print(f"wrote {args.out}")
 
 

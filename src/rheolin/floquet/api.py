@@ -425,6 +425,8 @@ def _lattice_auto(
     tried: list[int] = []
     seconds = float(res.info["seconds"])
     while refine and not res.decided and p < top:
+        if res.stable and large.band_failed(modes):
+            break  # a finer lattice cannot bound the modes the band leaves out
         finer = floquet_lattice(system, p + 1, max_size=10**6)
         if lattice_memory(system, finer) > limit:
             more = f"undecided at lattice order {p}; order {p + 1} would exceed the memory budget"

@@ -23,6 +23,8 @@ True
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
@@ -41,6 +43,7 @@ __all__ = [
     "BandAveraged",
     "band_memory",
     "band_modes",
+    "hopeless",
     "time_averaged",
 ]
 
@@ -69,7 +72,8 @@ class BandAveraged(Averaged):
     """The ``modes`` time-averaged modes nearest 0, balanced like
     :class:`~rheolin.floquet.averaged.Averaged` (``lam``, ``X``, ``W``, ``WB``, ``bound``,
     ``sq``, ``sv``; ``W^H B X = I``). ``complement`` (set by :func:`band_modes`) holds the
-    certificates of the modes left out; until then the Gershgorin radii are infinite."""
+    certificates of the modes left out; until then the Gershgorin radii are infinite; ``cpu``
+    the CPU seconds of its Arnoldi runs and scans (every band size tried)."""
 
     partial = True
 
@@ -107,6 +111,7 @@ class BandAveraged(Averaged):
         self.bound = EPS * (normA + np.abs(lam) * normB) * np.where(ok, cond, np.inf)
         self.radius = float(np.max(np.abs(lam), initial=0.0))
         self.complement: Complement | None = None
+        self.cpu: dict[str, float] = {}  # CPU seconds of band_modes' stages
         self._gershgorin = None
 
     def gershgorin(self, system: PeriodicSystem, modes: list[int]) -> list[float]:
@@ -200,32 +205,65 @@ def band_modes(
     :data:`~rheolin.floquet.complement.KAPPA_LIMIT`, up to :data:`BAND_MAX_MODES` (and
     ``budget`` bytes); the last one is returned, its ``complement`` saying what failed."""
     k = BAND_MODES if modes is None else int(modes)
+    failed: list[float] = []  # kappa_C of the bands that failed (>= 1), smallest band first
+    cpu = {"arnoldi": 0.0, "scan": 0.0}  # CPU seconds of every band tried
     while True:
+        t = time.process_time()
         band = BandAveraged(system, k)
-        band.complement = certify(system, band)
-        c = band.complement
+        cpu["arnoldi"] += time.process_time() - t
+        band.cpu = cpu
         bigger = 2 * k
-        fits = budget is None or band_memory(system, bigger) <= budget
-        if (
+        last = (
             modes is not None
-            or (c.certified and c.kappa <= KAPPA_LIMIT and not c.energy_note.startswith("K_s"))
             or bigger > min(BAND_MAX_MODES, 2 * system.n - 2)
-            or not fits
-        ):
+            or not (budget is None or band_memory(system, bigger) <= budget)
+        )
+        # a band that will be enlarged anyway once kappa_C passes KAPPA_LIMIT stops there
+        t = time.process_time()
+        band.complement = certify(system, band, 1.0 if last else KAPPA_LIMIT)
+        cpu["scan"] += time.process_time() - t
+        c = band.complement
+        if last or (c.certified and c.kappa <= KAPPA_LIMIT and not c.energy_note.startswith("K_s")):
             return band
+        if c.kappa >= 1.0:
+            failed.append(c.kappa)
+            if hopeless(failed):
+                return band
         k = bigger
 
 
-def certify(system: PeriodicSystem, band: BandAveraged) -> Complement:
+def hopeless(failed: list[float]) -> bool:
+    """Whether the band stops growing: its last two sizes both failed with
+    ``kappa_C >= 1`` and the next, were ``kappa_C`` to shrink by the same factor again,
+    would fail too (the modes left out that couple lie far above the band).
+
+    >>> hopeless([9.4, 3.5]), hopeless([9.4, 1.5]), hopeless([3.0])
+    (True, False, False)
+    """
+    if len(failed) < 2:
+        return False
+    a, b = failed[-2], failed[-1]
+    return b * (b / a) >= 1.0
+
+
+def certify(system: PeriodicSystem, band: BandAveraged, stop: float = 1.0) -> Complement:
     """The small-gain scan up to the pencil's largest frequency (a norm bound), which
     certifies the band, and the energy bound at the band's radius, reported with it (the
-    time-averaged eigenvalues of modes the time variation does not touch at all)."""
+    time-averaged eigenvalues of modes the time variation does not touch at all). The scan
+    ends at the first point where ``kappa_C >= stop`` (``stop <= 1``); the band is then not
+    certified."""
     ok, why = energy_certificate(system, band.radius)
     scan = Scan(system, band)
-    out = scan.run(_top_frequency(system, band))
+    out = scan.run(_top_frequency(system, band), min(stop, 1.0))
     out.radius = band.radius
     out.energy, out.energy_note = ok, why
-    if not out.kappa < 1.0:
+    if not out.complete and out.kappa < 1.0:
+        out.certified = False
+        out.reason = (
+            f"the small-gain bound reached {out.kappa:.3g} at {out.at:.4g} rad/s, above "
+            f"{KAPPA_LIMIT}: a larger band is tried"
+        )
+    elif not out.kappa < 1.0:
         out.certified = False
         out.reason = (
             f"a mode outside the band couples to the time variation more than its damping "

@@ -75,6 +75,7 @@ class Complement:
     radius: float = float("nan")
     g_max: float = float("inf")
     points: int = 0
+    complete: bool = True
     p: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def summary(self) -> dict[str, Any]:
@@ -203,6 +204,19 @@ def _norm2(apply: Any, adjoint: Any, dim: int, rng: np.random.Generator) -> floa
     return value
 
 
+def coarse_to_fine(count: int) -> np.ndarray:
+    """The indices ``0 .. count-1``, every 16th first, then every 8th, ... then the rest.
+
+    >>> coarse_to_fine(5).tolist()
+    [0, 4, 2, 1, 3]
+    """
+    order = np.arange(count)
+    level = np.zeros(count, dtype=int)
+    for stride in (2, 4, 8, 16):
+        level[order % stride == 0] -= 1
+    return np.asarray(order[np.argsort(level, kind="stable")])
+
+
 class Scan:
     """The small-gain bound of the modes a band leaves out, on a frequency scan.
 
@@ -290,11 +304,12 @@ class Scan:
         T, n, r = self.T, self.n, self.T.size
         sq, sv, Y, Wf = self.sq, self.sv, self.Y, self.Wf
 
-        def hc(f: np.ndarray) -> np.ndarray:
-            F = np.zeros(n, dtype=complex)
-            F[T] = sv * f
+        def hc(f: np.ndarray) -> np.ndarray:  # one force (r) or a block of them (r x m)
+            F = np.zeros((n, *f.shape[1:]), dtype=complex)
+            F[T] = (sv * f.T).T
             g = lu.solve(F)[T]
-            return np.concatenate([sq * g, sv * (s * g)]) - Y @ (c * (Wf.conj().T @ f))
+            band_part = Y @ (c * (Wf.conj().T @ f).T).T
+            return np.concatenate([(sq * g.T).T, (sv * (s * g).T).T]) - band_part
 
         def hc_h(y: np.ndarray) -> np.ndarray:
             yq, yv = y[:r], y[r:]
@@ -310,7 +325,7 @@ class Scan:
             kappa += _norm2(
                 lambda x, E=E: hc(E @ x), lambda y, EH=EH: EH @ hc_h(y), 2 * r, self.rng
             )
-            qs += float(sum(np.linalg.norm(hc(E @ Y[:, j])) for j in range(Y.shape[1])))
+            qs += float(np.sum(np.linalg.norm(hc(np.asarray(E @ Y)), axis=0)))
 
         def gc(f: np.ndarray) -> np.ndarray:
             return hc(f / sv * 1.0)[:r] / sq
@@ -341,20 +356,26 @@ class Scan:
         return complex(s + 1.0 / theta) if theta != 0 else complex("inf")
 
     # ------------------------------------------------------------------ the scan
-    def run(self, top: float) -> Complement:
+    def run(self, top: float, stop: float = float("inf")) -> Complement:
         """The scan from a tenth of the smallest band frequency to ``top`` rad/s, refined at
-        the eigenvalue nearest each point when its peak may be narrower than the grid."""
+        the eigenvalue nearest each point when its peak may be narrower than the grid.
+
+        The grid is visited coarse to fine (every 16th point first, then those between) and
+        the scan ends at the first point where ``kappa_C >= stop``: the band is then known
+        to fail, and ``kappa`` reports that point's value (a lower bound of the largest)."""
         band = self.band
         low = max(float(np.min(np.abs(band.lam), initial=self.w)), 1e-6 * self.w)
         low = min(low, self.w) / 10
         count = max(int(np.ceil(PER_OCTAVE * np.log2(max(top / low, 2.0)))), 2)
-        grid = list(np.geomspace(low, top, count))
+        grid = np.geomspace(low, top, count)
         spacing = 2.0 ** (1.0 / PER_OCTAVE) - 1.0
         seen: list[tuple[float, float, float, float]] = []
         extra: list[float] = []
-        for omega in grid:
+        for omega in grid[coarse_to_fine(count)]:
             kap, qs, g, lu = self.at(omega)
             seen.append((omega, kap, qs, g))
+            if not kap < stop:
+                break
             if lu is None:
                 continue
             mu = self.nearest(lu, omega)
@@ -363,9 +384,12 @@ class Scan:
             near_band = np.min(np.abs(band.lam - mu), initial=np.inf) <= 1e-6 * abs(mu)
             if not near_band and abs(mu.real) < spacing * mu.imag:
                 extra.append(float(mu.imag))
-        for omega in sorted(set(np.round(extra, 9))):
-            kap, qs, g, _ = self.at(omega)
-            seen.append((omega, kap, qs, g))
+        else:
+            for omega in sorted(set(np.round(extra, 9))):
+                kap, qs, g, _ = self.at(omega)
+                seen.append((omega, kap, qs, g))
+                if not kap < stop:
+                    break
         arr = np.array(seen)
         kappa = arr[:, 1]
         i = int(np.argmax(kappa))
@@ -376,14 +400,19 @@ class Scan:
             g_max=float(np.max(arr[:, 3])),
             points=len(seen),
         )
-        if np.all(kappa < 1.0):
+        out.complete = not kappa[-1] >= stop
+        if out.complete and np.all(kappa < 1.0):
             out.beta = float(np.max(arr[:, 2] / (1.0 - kappa)))
         # each band mode's coupling into the touched DOFs' forces: ||w_j^H J E_k|| summed
         Wf = self.Wf
         p = np.zeros(band.lam.size)
-        for k in self.E:
-            for j in range(band.lam.size):
-                E = self.coupling(k, band.lam[j] - 1j * k * self.w)
-                p[j] += float(np.linalg.norm(Wf[:, j].conj() @ E))
+        WfH = Wf.conj().T
+        for k, parts in self.E.items():
+            # rows j of w_j^H [K_k, D_k + s_j M_k] with s_j = lam_j - i k w1, all j at once
+            Kp, Dp, Mp = (None if x is None else np.asarray((x.T @ WfH.T).T) for x in parts)
+            sj = (band.lam - 1j * k * self.w)[:, None]
+            rows_q = 0.0 if Kp is None else np.abs(Kp) ** 2
+            rows_v = (0.0 if Dp is None else Dp) + (0.0 if Mp is None else sj * Mp)
+            p += np.sqrt(np.sum(rows_q + np.abs(rows_v) ** 2, axis=1))
         out.p = p
         return out

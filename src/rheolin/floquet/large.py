@@ -27,6 +27,7 @@ from .search import lattice_memory
 __all__ = [
     "DISTRIBUTED",
     "band_estimate",
+    "band_failed",
     "band_info",
     "certified_band",
     "frames_to_rotate",
@@ -93,6 +94,14 @@ def band_estimate(system: PeriodicSystem, order: int, modes: int | None = None) 
     return band_memory(system, modes or BAND_MODES) + lattice_memory(system, lattice)
 
 
+def band_failed(modes: Any) -> bool:
+    """Whether ``modes`` is a band whose modes left out are not bounded: no lattice order
+    then decides a stable verdict (only an unstable exponent found in the band decides)."""
+    if not isinstance(modes, BandAveraged):
+        return False
+    return modes.complement is None or not modes.complement.certified
+
+
 def band_info(modes: Any, rotated: list[str]) -> dict[str, Any]:
     """What ``info["band"]`` reports: the band's size and radius, the bodies written in their
     frames, and the certificates of the modes left out."""
@@ -102,6 +111,7 @@ def band_info(modes: Any, rotated: list[str]) -> dict[str, Any]:
         "modes": int(modes.lam.size),
         "radius": modes.radius,
         "frames": list(rotated),
+        "cpu": dict(modes.cpu),
     }
     if modes.complement is not None:
         out.update(modes.complement.summary())
