@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["ACCEPT_WEIGHT", "CENTRED", "CLUSTER_TOL", "DEPENDENT", "LOCK_TOL"]
+__all__ = ["ACCEPT_WEIGHT", "CENTRED", "CLUSTER_TOL", "DEPENDENT", "LOCK_CAP", "LOCK_TOL"]
 
 
 #: Averaged exponents closer than this (relative) are searched together.
@@ -36,6 +36,9 @@ DEPENDENT = 1e-3
 #: and -16.82). Its conjugate is then not counted as another exponent: the search must find
 #: the second one (the split partner, or the conjugate's copy when the pair has not split).
 LOCK_TOL = 1e-4
+
+#: ... at most this fraction of ``w1``.
+LOCK_CAP = 0.01
 
 
 @dataclass
@@ -137,7 +140,9 @@ def select(
             if sv[-1] <= DEPENDENT * sv[0]:
                 continue
         mirrored = (-c.top[0], -c.top[1])
-        lock = LOCK_TOL * max(abs(c.lam), w)
+        # at most a hundredth of w1: copies lie w1 apart, and a slack near w1 / 2 (a
+        # hunting-tooth period) would take every exponent for one of a locked pair
+        lock = min(LOCK_TOL * max(abs(c.lam), w), LOCK_CAP * w)
         selfconj = _copy_of(c, np.conj(c.lam), mirrored, w, allow_zero=True, slack=lock)
         kept.append((c, not selfconj))
         known.append((c.lam, c.top, y, c.slack))
