@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from ..budget import MemoryBudgetError
+from ..errors import ModelError
 from ..harmonics.lattice import Lattice
 
 __all__ = [
@@ -19,6 +22,7 @@ __all__ = [
     "TRUNCATION_SAFETY",
     "FloquetResult",
     "failed_result",
+    "guarded",
 ]
 
 #: What a numerical failure of a stability check raises (a factorization, an eigensolver that
@@ -269,7 +273,7 @@ def floquet_result(
     )
 
 
-def failed_result(reason: str, omega: float = float("nan")) -> FloquetResult:
+def failed_result(reason: str) -> FloquetResult:
     """The verdict of a check that failed numerically: no exponent, undecided, and why in
     ``info["error"]``.
 
@@ -283,9 +287,27 @@ def failed_result(reason: str, omega: float = float("nan")) -> FloquetResult:
         stable=False,
         marginal=False,
         tol=float("nan"),
-        omega=omega,
+        omega=float("nan"),
         converged=False,
         method="failed",
         complete=False,
         info={"error": reason},
     )
+
+
+def guarded(check: Callable[..., FloquetResult], *args: Any, **kwargs: Any) -> FloquetResult:
+    """``check(*args, **kwargs)``, or its :func:`failed_result` when it fails numerically
+    (:data:`NUMERICAL_FAILURES`); a refusal (a :class:`~rheolin.errors.ModelError` such as
+    a free body, or the memory budget) is the caller's and propagates.
+
+    >>> def arpack():
+    ...     raise RuntimeError("ARPACK error -1: No convergence")
+    >>> guarded(arpack).info["error"]
+    'RuntimeError: ARPACK error -1: No convergence'
+    """
+    try:
+        return check(*args, **kwargs)
+    except (ModelError, MemoryBudgetError):
+        raise
+    except NUMERICAL_FAILURES as exc:
+        return failed_result(f"{type(exc).__name__}: {exc}")

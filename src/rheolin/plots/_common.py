@@ -103,3 +103,13 @@ def mark_frequencies(
                 )
             )
     return texts
+
+
+def hatch_undecided(axes: Any, rpm: np.ndarray, undecided: np.ndarray) -> None:
+    """Hatch each undecided speed on ``axes`` (an Axes or several), from halfway to the
+    previous sample to halfway to the next: neither stable nor unstable."""
+    rpm = np.asarray(rpm, dtype=float)
+    edges = np.concatenate([[rpm[0]], 0.5 * (rpm[1:] + rpm[:-1]), [rpm[-1]]])
+    for i in np.flatnonzero(np.asarray(undecided, dtype=bool)):
+        for ax in np.atleast_1d(axes):
+            ax.axvspan(edges[i], edges[i + 1], fc="none", ec="0.35", hatch="///", lw=0)

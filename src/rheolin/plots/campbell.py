@@ -11,7 +11,7 @@ from matplotlib.colors import LinearSegmentedColormap, Normalize
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from ._common import new_figure, save
+from ._common import hatch_undecided, new_figure, save
 
 __all__ = ["campbell_figure", "critical_map_figure", "plot_campbell", "plot_critical_map"]
 
@@ -124,11 +124,7 @@ def campbell_figure(result: Any, fmax_hz: float | None = None, stability: Any = 
             for a in (ax, axd):
                 a.axvspan(r.lower * RPM, r.upper * RPM, color="tab:red", alpha=0.12, lw=0)
         undecided = np.asarray(stability.undecided, dtype=bool)
-        srpm = np.asarray(stability.speeds, dtype=float) * RPM
-        edges = np.concatenate([[srpm[0]], 0.5 * (srpm[1:] + srpm[:-1]), [srpm[-1]]])
-        for i in np.flatnonzero(undecided):  # neither stable nor unstable: hatched
-            for a in (ax, axd):
-                a.axvspan(edges[i], edges[i + 1], fc="none", ec="0.35", hatch="///", lw=0)
+        hatch_undecided([ax, axd], np.asarray(stability.speeds) * RPM, undecided)
     ax.set_ylabel("damped natural frequency [Hz]")
     title = "Campbell diagram (time-averaged system)"
     if stability is not None:

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from ._common import new_figure, save
+from ._common import hatch_undecided, new_figure, save
 
 __all__ = ["plot_stability"]
 
@@ -74,10 +74,7 @@ def plot_stability(map: Any, path: str | Path) -> Path:
         ax.plot(rpm[bad], mr[bad], "o", ms=4, color="tab:red", label="unstable")
     if undecided.any():
         ax.plot(rpm[undecided], mr[undecided], "x", ms=7, color="k", label="verdict undecided")
-        edges = np.concatenate([[rpm[0]], 0.5 * (rpm[1:] + rpm[:-1]), [rpm[-1]]])
-        for i in np.flatnonzero(undecided):
-            hatch = {"facecolor": "none", "edgecolor": "0.35", "hatch": "///", "lw": 0}
-            ax.axvspan(edges[i], edges[i + 1], **hatch)
+        hatch_undecided(ax, rpm, undecided)
     ax.axhline(0.0, color="k", lw=0.8)
     for r in map.ranges:
         lo, hi = r.lower * RPM, r.upper * RPM

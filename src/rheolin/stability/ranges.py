@@ -37,7 +37,23 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["MAX_EVALUATIONS", "MAX_UNDECIDED", "Edge", "refine_edge", "states", "unstable_runs"]
+from ..floquet import Continuation, FloquetResult
+from ..floquet.result import guarded
+
+__all__ = [
+    "EDGE_RTOL",
+    "MAX_EVALUATIONS",
+    "MAX_UNDECIDED",
+    "Edge",
+    "edge_between",
+    "refine_edge",
+    "states",
+    "unstable_runs",
+]
+
+#: Accuracy of the leading exponent asked of an edge's verdict left undecided by its lattice
+#: (at most: a third of its real part is enough to decide it).
+EDGE_RTOL = 0.1
 
 #: Probes beyond the first on each side of an undecided zone (each four times farther).
 MAX_UNDECIDED = 3
@@ -178,13 +194,11 @@ def _around_undecided(
     if len(grow) >= 2:
         (w1, f1), (w2, f2) = sorted(grow, key=lambda p: abs(p[0] - x))[:2]
         slope = abs(f2 - f1) / max(abs(w2 - w1), 1e-300)
-    step = max(xtol, 2.0 * 1e-300)
     count = undecided = 0
     for want_stable, end, dec in ((True, a, dec_a), (False, b, dec_b)):
         if dec == end:
             continue
-        r0 = None
-        d = max(abs(end - x), step)
+        d = max(abs(end - x), xtol)
         for _ in range(MAX_UNDECIDED + 1):
             y = x + float(np.sign(end - x)) * d
             if not min(dec, x) < y < max(dec, x):
@@ -203,6 +217,71 @@ def _around_undecided(
                 d = max(d, 2.0 * unc / slope)
             d *= 4.0
     return dec_a, dec_b, count, undecided
+
+
+def edge_between(
+    run: Callable[..., tuple[Any, FloquetResult]],
+    count: list[int],
+    stable: tuple[float, FloquetResult],
+    unstable: tuple[float, FloquetResult],
+    refine: float,
+) -> Any:
+    """One range edge between two decided samples, every evaluation a full verdict continued
+    from the previous one (its largest real part not refined: the verdict is what counts).
+
+    Between two lattice verdicts the evaluations use the larger of their lattice orders
+    (the edge's speeds need no more than its samples, except within the truncation
+    uncertainty of the crossing). Where that order leaves a speed undecided, its leading
+    exponent is refined near it until its uncertainty is a third of its real part, then the
+    next order decides;
+    a speed still undecided is bracketed by :func:`~rheolin.stability.ranges.refine_edge`.
+    (The automatic verdict would climb through every order up to the one that decides, at
+    ten times the cost.)"""
+    cont = Continuation()
+    orders = [_lattice_order(r) for r in (stable[1], unstable[1])]
+    fixed = max(orders) if None not in orders else None  # type: ignore[type-var]
+
+    def verdict(W: float) -> FloquetResult:
+        res = guarded(checked, W)
+        if res.method == "failed":  # no verdict there: refine_edge stops at it
+            cont.clear()
+        return res
+
+    def checked(W: float) -> FloquetResult:
+        count[0] += 1
+        if fixed is None:  # the automatic verdict raises its own order where undecided
+            return run(W, cont, float("inf"))[1]
+        res = run(W, cont, float("inf"), fixed)[1]
+        if not res.decided:  # the leading exponent refined near it, enough to decide
+            count[0] += 1
+            res = run(W, cont, _deciding_rtol(res), fixed)[1]
+        if not res.decided:  # then the next order
+            count[0] += 1
+            res = run(W, cont, float("inf"), fixed + 1)[1]
+        return res
+
+    return refine_edge(
+        verdict, (float(stable[0]), stable[1]), (float(unstable[0]), unstable[1]), refine
+    )
+
+
+def _deciding_rtol(res: FloquetResult) -> float:
+    """An ``rtol`` that makes the leading exponent's uncertainty a third of its real part
+    (the target of :func:`~rheolin.floquet.accuracy.target`), at most :data:`EDGE_RTOL`."""
+    from ..floquet.accuracy import ZETA_FLOOR
+
+    re, lam = abs(float(res.max_real)), complex(res.leading)
+    if not (np.isfinite(re) and np.isfinite(lam)) or re == 0:
+        return EDGE_RTOL
+    return float(min(EDGE_RTOL, re / (3.0 * max(re, ZETA_FLOOR * abs(lam)))))
+
+
+def _lattice_order(res: FloquetResult) -> int | None:
+    """The order of the lattice a verdict was decided on (None: not a lattice verdict)."""
+    lattice = getattr(res, "lattice", None)
+    if res.method != "lattice" or lattice is None:
+        return None
+    return int(lattice.order)
 
 
 def states(stable: np.ndarray, decided: np.ndarray) -> np.ndarray:

@@ -8,9 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ModelError
 from ..floquet import FloquetResult, floquet
-from ..floquet.result import NUMERICAL_FAILURES, failed_result
+from ..floquet.result import guarded
 from ..harmonics.sets import as_harmonic_set
 from .mechanism import (
     ASYMMETRY,
@@ -22,7 +21,7 @@ from .mechanism import (
     Mechanism,
 )
 from .mechanism import identify as _identify
-from .ranges import refine_edge, states, unstable_runs
+from .ranges import edge_between, states, unstable_runs
 
 __all__ = [
     "StabilityMap",
@@ -31,9 +30,6 @@ __all__ = [
     "mechanism",
     "stability_map",
 ]
-#: Accuracy of the leading exponent asked of an edge's verdict left undecided by its lattice
-#: (at most: a third of its real part is enough to decide it).
-EDGE_RTOL = 0.1
 
 __categories__ = (ROTATING_DAMPING, CIRCULATORY, MESH, ASYMMETRY, COMBINED, UNIDENTIFIED)
 
@@ -320,13 +316,13 @@ def stability_map(
 
     cont = Continuation()  # each speed's lattice searches start from the previous speed's
     results: list[FloquetResult] = []
+
+    def at(W: float) -> FloquetResult:
+        return evaluate(W, continuation=cont)[1]
+
     for i, W in enumerate(speeds):
-        try:
-            results.append(evaluate(W, continuation=cont)[1])
-        except ModelError:  # a refusal (the memory budget, a free body) is the caller's
-            raise
-        except NUMERICAL_FAILURES as exc:  # this speed undecided, with the reason
-            results.append(failed_result(f"{type(exc).__name__}: {exc}"))
+        results.append(guarded(at, W))
+        if results[-1].method == "failed":  # this speed undecided, with the reason
             cont.clear()
         if progress is not None:
             progress(i, results[-1])
@@ -413,13 +409,13 @@ def map_from_results(
         lo_unc = hi_unc = float("nan")
         if i > 0:  # bracket: the decided stable sample below, the first decided unstable one
             k = int(unstable[0])
-            edge = _edge(
+            edge = edge_between(
                 run, count, (speeds[i - 1], results[i - 1]), (speeds[k], results[k]), refine
             )
             lo, lo_unc = edge.speed, edge.uncertainty
         if j < speeds.size - 1:  # and above: the decided stable one, the last unstable one
             k = int(unstable[-1])
-            edge = _edge(
+            edge = edge_between(
                 run, count, (speeds[j + 1], results[j + 1]), (speeds[k], results[k]), refine
             )
             hi, hi_unc = edge.speed, edge.uncertainty
@@ -467,76 +463,6 @@ def evaluate_lattice(model: Any, W: float, order: int | None, budget: Any) -> tu
     """The model at ``W`` and its lattice Floquet result (for naming a mechanism)."""
     a = model.assemble(float(W))
     return a, floquet(a.system, method="lattice", order=order, memory_budget=budget)
-
-
-def _edge(
-    run: Callable[..., tuple[Any, FloquetResult]],
-    count: list[int],
-    stable: tuple[float, FloquetResult],
-    unstable: tuple[float, FloquetResult],
-    refine: float,
-) -> Any:
-    """One range edge between two decided samples, every evaluation a full verdict continued
-    from the previous one (its largest real part not refined: the verdict is what counts).
-
-    Between two lattice verdicts the evaluations use the larger of their lattice orders
-    (the edge's speeds need no more than its samples, except within the truncation
-    uncertainty of the crossing). Where that order leaves a speed undecided, its leading
-    exponent is refined near it until its uncertainty is a third of its real part, then the
-    next order decides;
-    a speed still undecided is bracketed by :func:`~rheolin.stability.ranges.refine_edge`.
-    (The automatic verdict would climb through every order up to the one that decides, at
-    ten times the cost.)"""
-    from ..floquet import Continuation
-
-    cont = Continuation()
-    orders = [_lattice_order(r) for r in (stable[1], unstable[1])]
-    fixed = max(orders) if None not in orders else None  # type: ignore[type-var]
-
-    def verdict(W: float) -> FloquetResult:
-        try:
-            return checked(W)
-        except ModelError:
-            raise
-        except NUMERICAL_FAILURES as exc:  # no verdict there: refine_edge stops at it
-            cont.clear()
-            return failed_result(f"{type(exc).__name__}: {exc}")
-
-    def checked(W: float) -> FloquetResult:
-        count[0] += 1
-        if fixed is None:  # the automatic verdict raises its own order where undecided
-            return run(W, cont, float("inf"))[1]
-        res = run(W, cont, float("inf"), fixed)[1]
-        if not res.decided:  # the leading exponent refined near it, enough to decide
-            count[0] += 1
-            res = run(W, cont, _deciding_rtol(res), fixed)[1]
-        if not res.decided:  # then the next order
-            count[0] += 1
-            res = run(W, cont, float("inf"), fixed + 1)[1]
-        return res
-
-    return refine_edge(
-        verdict, (float(stable[0]), stable[1]), (float(unstable[0]), unstable[1]), refine
-    )
-
-
-def _deciding_rtol(res: FloquetResult) -> float:
-    """An ``rtol`` that makes the leading exponent's uncertainty a third of its real part
-    (the target of :func:`~rheolin.floquet.accuracy.target`), at most :data:`EDGE_RTOL`."""
-    from ..floquet.accuracy import ZETA_FLOOR
-
-    re, lam = abs(float(res.max_real)), complex(res.leading)
-    if not (np.isfinite(re) and np.isfinite(lam)) or re == 0:
-        return EDGE_RTOL
-    return float(min(EDGE_RTOL, re / (3.0 * max(re, ZETA_FLOOR * abs(lam)))))
-
-
-def _lattice_order(res: FloquetResult) -> int | None:
-    """The order of the lattice a verdict was decided on (None: not a lattice verdict)."""
-    lattice = getattr(res, "lattice", None)
-    if res.method != "lattice" or lattice is None:
-        return None
-    return int(lattice.order)
 
 
 def _uncertainty(res: FloquetResult) -> float:

@@ -24,7 +24,6 @@ import xarray as xr
 from threadpoolctl import threadpool_limits
 
 from ..budget import MemoryBudgetError
-from ..errors import ModelError
 from ..harmonics.sets import TruncationWarning
 from ..io.loader import LoadedModel
 from .chunks import chunk_dataset, point_row
@@ -178,7 +177,7 @@ def _solve(
     """The point's row and its solution, from ``x0`` (the previous speed's solution, or
     None) with the Floquet ``continuation`` of its block."""
     from ..floquet import floquet
-    from ..floquet.result import NUMERICAL_FAILURES, failed_result
+    from ..floquet.result import guarded
     from ..results.compute import solve_point
 
     p = solve_point(
@@ -196,14 +195,13 @@ def _solve(
     result = p.solution.floquet
     if result is None and s.stability_map:
         try:  # for the map: the verdict is off, or skipped by the budget check
-            result = floquet(p.assembled.system, continuation=continuation)
+            result = guarded(floquet, p.assembled.system, continuation=continuation)
         except MemoryBudgetError as exc:
             p.solution.message += f"; no Floquet result for the stability map: {exc}"
-        except ModelError:
-            raise
-        except NUMERICAL_FAILURES as exc:  # the verdict open, the steady state stands
-            p.solution.message += f"; no Floquet result for the stability map: {exc}"
-            result = failed_result(f"{type(exc).__name__}: {exc}")
+        if result is not None and result.method == "failed":  # the steady state stands
+            p.solution.message += (
+                f"; no Floquet result for the stability map: {result.info['error']}"
+            )
     return point_row(p, result, time.perf_counter() - t0), p.solution
 
 
