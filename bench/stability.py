@@ -14,8 +14,9 @@
     CPU seconds of the verdict against the solve per speed, inside / near (within 100 rpm of
     an edge) / far from the range; then the map's bounds from samples every 100 rpm against
     the monodromy reference (``tests/stability/data/gear_variant_ranges.json``).
-(e) The Campbell diagram of the embedded gearbox at 250:6000:250 rpm with and without its
-    stability map (CPU seconds).
+(e) The Campbell diagram of the embedded gearbox at 0:6000:250 rpm with and without its
+    stability map (CPU seconds per speed), and ``rheolin campbell`` with ``--stability off``
+    and with its default check, one after the other (wall and CPU seconds).
 
 Every measurement runs in its own subprocess (peak RSS from ``/proc``, see ``_memory.py``).
 
@@ -294,20 +295,66 @@ def _campbell(step: float) -> dict:
     from rheolin.study.run import MAP_PRECISION
 
     model = _model()
-    speeds = np.arange(step, 6000.0 + step / 2, step) * RPM
+    speeds = np.arange(0.0, 6000.0 + step / 2, step) * RPM  # as `rheolin campbell 0:6000:...`
     c = time.process_time()
     campbell(model, speeds)
     alone = time.process_time() - c
+    per: list[float] = []
+    orders: list[int] = []
+    last = [time.process_time()]
+
+    def tick(i: int, res: object) -> None:
+        now = time.process_time()
+        per.append(now - last[0])
+        last[0] = now
+        lattice = getattr(res, "lattice", None)
+        orders.append(lattice.order if lattice is not None else 0)
+
     c = time.process_time()
-    smap = stability_map(model, speeds, refine=MAP_PRECISION)
+    smap = stability_map(model, speeds, refine=MAP_PRECISION, progress=tick)
     check = time.process_time() - c
     return {
         "speeds": int(speeds.size),
         "campbell": alone,
         "check": check,
+        "per_speed": per,
+        "orders": orders,
+        "continued": int(smap.info.get("continued", 0)),
         "decided": int(np.sum(smap.decided)),
+        "stable": int(np.sum(smap.stable)),
         "ranges": len(smap.ranges),
+        "cli": _campbell_cli(step),
     }
+
+
+def _campbell_cli(step: float) -> dict:
+    """``rheolin campbell gearbox.toml --speeds 0:6000:<step>rpm`` with and without its
+    stability check, one after the other: wall and CPU seconds of each."""
+    import os
+    import resource
+    import tempfile
+
+    out: dict = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        rheolin = [sys.executable, "-m", "rheolin.cli"]
+        env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
+        model = subprocess.run(
+            [*rheolin, "example", "gearbox"], check=True, env=env, capture_output=True, text=True
+        )
+        Path(tmp, "gearbox.toml").write_text(model.stdout)
+        for flag in ("off", "auto"):
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            t = time.perf_counter()
+            done = subprocess.run(
+                [*rheolin, "campbell", "gearbox.toml", "--speeds", f"0:6000:{step:g}rpm",
+                 "--stability", flag, "--out", f"out_{flag}"],
+                cwd=tmp, env=env, capture_output=True, text=True,
+            )  # fmt: skip
+            wall = time.perf_counter() - t
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+            out[flag] = {"wall": wall, "cpu": cpu, "exit": done.returncode}
+    return out
 
 
 def _run(args: list[str]) -> dict:
@@ -471,15 +518,36 @@ def _runup_lines(u: dict) -> list[str]:
 
 
 def _campbell_lines(c: dict) -> list[str]:
-    return [
+    per = np.array(c["per_speed"])
+    cli = c["cli"]
+    off, on = cli["off"], cli["auto"]
+    worst = int(np.argmax(per))
+    step = 6000.0 / (c["speeds"] - 1)
+    lines = [
         "",
-        f"## Campbell diagram with its stability check ({c['speeds']} speeds, 250:6000:250 rpm)",
+        f"## Campbell diagram with its stability check ({c['speeds']} speeds, 0:6000:{step:g} rpm)",
         "",
-        f"Campbell diagram alone {c['campbell']:.1f} CPU s; its stability map "
-        f"{c['check']:.1f} CPU s: the check costs **{c['check'] / c['campbell']:.1f}x** the "
-        f"diagram; {c['decided']} of {c['speeds']} verdicts decided, {c['ranges']} unstable "
-        "ranges.",
+        "`python bench/stability.py --sections campbell` (CPU seconds in one process; the",
+        "command lines one after the other, wall and CPU of each):",
+        "",
+        "| | CPU s | wall s |",
+        "|---|---|---|",
+        f"| `campbell()` alone | {c['campbell']:.1f} | |",
+        f"| `stability_map()` over the same speeds | {c['check']:.1f} | |",
+        f"| check / diagram | **{c['check'] / c['campbell']:.1f}x** | |",
+        f"| `rheolin campbell gearbox.toml --speeds 0:6000:{step:g}rpm --stability off` | "
+        f"{off['cpu']:.1f} | {off['wall']:.1f} |",
+        f"| the same with its default stability check | {on['cpu']:.1f} | {on['wall']:.1f} |",
+        f"| on / off | **{on['cpu'] / off['cpu']:.2f}x** | **{on['wall'] / off['wall']:.2f}x** |",
+        "",
+        f"Per speed of the map: median {np.median(per):.2f} s, the slowest "
+        f"{per[worst]:.2f} s at {worst * step:g} rpm, the standstill {per[0]:.2f} s (the frozen "
+        f"system); lattice orders {sorted(set(c['orders'][1:]))}; {c['continued']} speeds "
+        f"continued from the previous one; {c['decided']} of {c['speeds']} verdicts decided "
+        f"({c['stable']} stable), {c['ranges']} unstable ranges; exit codes "
+        f"{off['exit']} / {on['exit']}.",
     ]
+    return lines
 
 
 if __name__ == "__main__":

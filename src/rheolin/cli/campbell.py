@@ -55,7 +55,7 @@ def campbell(
 
     lm = load(model)
     w = parse_speeds(speeds, allow_zero=True)  # 0: the modes at standstill
-    spinning = w[w > 0]  # what the preflight and the Floquet map look at
+    spinning = w[w > 0]  # what the preflight looks at (the map's standstill is frozen)
     flag = stability_flag(stability)
     accuracy = floquet_rtol(floquet_accuracy)
     if fmax is not None and not (np.isfinite(fmax) and fmax > 0):
@@ -71,7 +71,7 @@ def campbell(
         with counted("Campbell diagram", w.size, "speeds") as step:
             result = campbell_fn(lm.model, w, progress=step)
         smap, why = (
-            _stability_map(lm.model, spinning, flag, accuracy)
+            _stability_map(lm.model, w, flag, accuracy)
             if spinning.size
             else (None, "standstill only")
         )

@@ -17,8 +17,9 @@ from .modes import (
     planetary_kinds,
     whirl_ratio,
 )
+from .standstill import STANDSTILL
 
-__all__ = ["CampbellResult", "CriticalSpeed", "campbell", "order_lines"]
+__all__ = ["STANDSTILL", "CampbellResult", "CriticalSpeed", "campbell", "order_lines"]
 
 
 @dataclass(frozen=True)
@@ -198,10 +199,6 @@ def order_lines(model: Any, speed: float = 1.0) -> dict[str, float]:
     for name, harmonic in plan.sets.items():  # planetary sets: one mesh frequency each
         out[f"mesh {name}"] = float(harmonic * plan.base) * speed
     return out
-
-
-#: The speed [rad/s] a standstill point of a Campbell diagram is assembled at.
-STANDSTILL = 1e-9
 
 
 def campbell(

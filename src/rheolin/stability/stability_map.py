@@ -22,6 +22,7 @@ from .mechanism import (
 )
 from .mechanism import identify as _identify
 from .ranges import edge_between, states, unstable_runs
+from .standstill import STANDSTILL, STANDSTILL_NOTE, standstill_verdict
 
 __all__ = [
     "StabilityMap",
@@ -32,6 +33,12 @@ __all__ = [
 ]
 
 __categories__ = (ROTATING_DAMPING, CIRCULATORY, MESH, ASYMMETRY, COMBINED, UNIDENTIFIED)
+
+#: A speed of a map continues the previous speed's lattice searches only when it is at most
+#: this fraction above it: farther, the copies of the exponents at the mesh harmonics have
+#: moved past their neighbours and the tracked representatives are other copies, which a
+#: finer lattice then cannot settle (docs/stability.md, section 5).
+CONTINUED_STEP = 0.02
 
 
 @dataclass(frozen=True)
@@ -219,7 +226,11 @@ def stability_map(
     At every speed the full periodic system is assembled and :func:`rheolin.floquet` decides
     stability with its automatic truncation (dense Hill for small systems, the harmonic
     lattice for gearboxes; balanced pencil, per-exponent tolerances), each speed continued
-    from the previous one (:class:`~rheolin.floquet.Continuation`). Contiguous samples that
+    from the previous one (:class:`~rheolin.floquet.Continuation`) when it is at most
+    :data:`CONTINUED_STEP` above it, else from scratch (``info["continued"]`` counts the
+    continued speeds). A speed of 0 is the standstill: the time-invariant system frozen at
+    ``t = 0`` (:mod:`rheolin.stability.standstill`; ``info["standstill"]`` says so).
+    Contiguous samples that
     are not decided stable, with at least one decided unstable, form an
     :class:`UnstableRange`; its bounds are refined between the bracketing decided samples
     to a relative precision ``refine`` where every evaluation is a full, decided verdict
@@ -231,7 +242,7 @@ def stability_map(
     model
         The model.
     speeds_rad_s
-        Increasing input speeds [rad/s].
+        Increasing input speeds [rad/s], >= 0 (0: the standstill).
     harmonics
         Hill truncation: None (automatic), a harmonic set / int (a dense grid), or
         ``callable(system) -> harmonic set``.
@@ -273,8 +284,8 @@ def stability_map(
     if identify is not None:  # the former keyword
         identify_mechanism = bool(identify)
     speeds = np.asarray(speeds_rad_s, dtype=float).ravel()
-    if speeds.size < 1 or np.any(speeds <= 0) or np.any(np.diff(speeds) <= 0):
-        raise ValueError("`speeds_rad_s` must be positive and strictly increasing [rad/s]")
+    if speeds.size < 1 or np.any(speeds < 0) or np.any(np.diff(speeds) <= 0):
+        raise ValueError("`speeds_rad_s` must be >= 0 and strictly increasing [rad/s]")
     t0 = time.perf_counter()
 
     def truncation(system: Any) -> Any:
@@ -318,9 +329,16 @@ def stability_map(
     results: list[FloquetResult] = []
 
     def at(W: float) -> FloquetResult:
+        if W == 0:  # nothing turns: the frozen time-invariant system, exact
+            return standstill_verdict(model, STANDSTILL, memory_budget=memory_budget)
         return evaluate(W, continuation=cont)[1]
 
+    continued = 0
     for i, W in enumerate(speeds):
+        if i and W - speeds[i - 1] > CONTINUED_STEP * W:
+            cont.clear()  # too far from the previous speed: a verdict from scratch
+        else:
+            continued += int(i > 0)
         results.append(guarded(at, W))
         if results[-1].method == "failed":  # this speed undecided, with the reason
             cont.clear()
@@ -337,6 +355,9 @@ def stability_map(
         evaluate=evaluate,
     )
     smap.info["evaluations"] = smap.info.get("evaluations", 0) + speeds.size
+    smap.info["continued"] = continued
+    if speeds[0] == 0:
+        smap.info["standstill"] = STANDSTILL_NOTE
     smap.info["seconds"] = time.perf_counter() - t0
     return smap
 
@@ -421,7 +442,7 @@ def map_from_results(
             hi, hi_unc = edge.speed, edge.uncertainty
         detail = None
         category = UNIDENTIFIED
-        if identify_mechanism:
+        if identify_mechanism and speeds[worst] > 0:  # a standstill has no harmonics
             a, res = (None, lead) if lead.method == "lattice" else (None, None)
             if res is None:  # the dense method has no partner harmonics
                 a, res = evaluate_lattice(model, speeds[worst], order, memory_budget)
