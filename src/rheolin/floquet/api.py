@@ -20,7 +20,7 @@ from ..system.rigid_modes import held_rigid_modes as find_rigid_modes
 from . import large
 from .accuracy import DEFAULT_RTOL, leading_uncertainty, next_lattice, refine_leading
 from .band import BandAveraged, band_memory
-from .confirm import confirm_unresolved
+from .confirm import confirm_unresolved, open_rows
 from .continuation import Continuation
 from .dense import floquet_dense
 from .resonance import floquet_lattice
@@ -485,12 +485,12 @@ def _floquet_lattice(
         )
         if continuation is not None and near is None:
             continuation.keep(system.n, lattice, out)
-        # unresolved exponents: search their clusters again on finer lattices (p + 1, p + 2),
-        # only near them, as long as the memory budget allows
+        # unresolved exponents and clusters short of theirs: search those clusters again on
+        # finer lattices (p + 1, p + 2), only near them, as long as the memory budget allows
         finer: Lattice | None = lattice
         steps: list[Any] = []
         used = est  # the largest lattice's estimate: what the verdict needed
-        while near is None and np.any(out.unresolved & ~out.certified) and len(steps) < 2:
+        while near is None and np.any(open_rows(out, system.omega)) and len(steps) < 2:
             finer = next_lattice(finer) if finer is not None else None
             if finer is None:
                 break
