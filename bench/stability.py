@@ -269,6 +269,8 @@ def _runup(step: float) -> dict:
                 "max_real": float(res.max_real),
                 "uncertainty": float(res.max_real_uncertainty),
                 "order": res.lattice.order if res.lattice is not None else None,
+                # the finest lattice any of its exponents comes from (confirmations included)
+                "finest": int(np.max(res.info["order"])) if res.exponents.size else None,
                 "accuracy": res.info.get("accuracy", {}).get("orders"),
             }
         )
@@ -338,6 +340,13 @@ def main() -> None:
         print(json.dumps(workers[kind](arg)))
         return
     sections = a.sections.split(",")
+    if sections == ["runup"] and a.out and a.out.exists():
+        text = _splice(a.out.read_text(), _runup_lines(_run(["--worker", "runup", "25"])))
+        print(text)
+        tmp = a.out.with_suffix(".tmp")
+        tmp.write_text(text)
+        tmp.replace(a.out)
+        return
     lines = [
         "# Floquet stability of the embedded gearbox (bench/stability.py)",
         "",
@@ -428,17 +437,24 @@ def _map_lines(m: dict) -> list[str]:
 
 def _runup_lines(u: dict) -> list[str]:
     rows = u["rows"]
+    ratios = np.array([r["verdict"] / r["solve"] for r in rows])
+    worst = rows[int(np.argmax(ratios))]
+    median_solve = float(np.median([r["solve"] for r in rows]))
     lines = [
         "",
         "## Run-up across an unstable range (gear variant, 72 DOFs, 3200-4100 rpm every 25 rpm)",
         "",
+        "`OPENBLAS_NUM_THREADS=1 python bench/stability.py --sections runup "
+        "--out bench/results/stability.md` (rewrites this section only).",
+        "",
         "Principal parametric resonance of the polymer second mesh, unstable 3439.46-3877.13 rpm "
         "(monodromy matrix). Per speed, CPU seconds; the verdict continued from the previous "
-        "speed as in a sweep, the solve from the previous solution.",
+        "speed as in a sweep, the solve from the previous solution; near: within 100 rpm of an "
+        "edge.",
         "",
         "| where | speeds | solve [s] median | verdict [s] median / max | verdict / solve max | "
-        "decided |",
-        "|---|---|---|---|---|---|",
+        "decided | lattice order |",
+        "|---|---|---|---|---|---|---|",
     ]
     for where in ("far", "near", "inside"):
         sel = [r for r in rows if r["where"] == where]
@@ -447,10 +463,34 @@ def _runup_lines(u: dict) -> list[str]:
         solve = np.array([r["solve"] for r in sel])
         verdict = np.array([r["verdict"] for r in sel])
         ratio = verdict / solve
+        orders = sorted({r["order"] for r in sel})
         lines.append(
             f"| {where} | {len(sel)} | {np.median(solve):.2f} | {np.median(verdict):.2f} / "
             f"{verdict.max():.2f} | {ratio.max():.1f}x | "
-            f"{sum(r['decided'] for r in sel)} of {len(sel)} |"
+            f"{sum(r['decided'] for r in sel)} of {len(sel)} | "
+            f"{', '.join(str(o) for o in orders)} |"
+        )
+    lines += [
+        "",
+        f"Worst ratio **{ratios.max():.1f}x** at {worst['rpm']:.0f} rpm (verdict "
+        f"{worst['verdict']:.2f} s, solve {worst['solve']:.2f} s); against the median solve "
+        f"({median_solve:.2f} s) the dearest verdict is "
+        f"{max(r['verdict'] for r in rows) / median_solve:.1f}x.",
+        "",
+        "Per speed within 100 rpm of an edge and inside (lattice order of the verdict, and the "
+        "finest order its exponents come from, confirmations included):",
+        "",
+        "| rpm | solve [s] | verdict [s] | ratio | order / finest | largest real part [1/s] |",
+        "|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        if r["where"] == "far":
+            continue
+        state = "" if r["decided"] else " (undecided)"
+        lines.append(
+            f"| {r['rpm']:.0f} | {r['solve']:.2f} | {r['verdict']:.2f} | "
+            f"{r['verdict'] / r['solve']:.1f}x | {r['order']} / {r['finest']} | "
+            f"{r['max_real']:+.5f} +- {r['uncertainty']:.2g}{state} |"
         )
     lines += [
         "",
@@ -468,6 +508,21 @@ def _runup_lines(u: dict) -> list[str]:
             f"{got - ref:+.2g} | {abs(got - ref) / ref:.1e} |"
         )
     return lines
+
+
+def _splice(old: str, section: list[str]) -> str:
+    """``old`` with its section of the same heading as ``section`` replaced (appended when
+    it has none): a run of some sections keeps the others' figures."""
+    heading = next(line for line in section if line.startswith("## "))
+    key = heading.split("(")[0]
+    lines = old.rstrip("\n").split("\n")
+    start = next((i for i, line in enumerate(lines) if line.startswith(key)), None)
+    body = section[section.index(heading) :]
+    if start is None:
+        return "\n".join([*lines, "", *body]) + "\n"
+    end = next((i for i in range(start + 1, len(lines)) if lines[i].startswith("## ")), len(lines))
+    tail = lines[end:]
+    return "\n".join([*lines[:start], *body, *([""] if tail else []), *tail]) + "\n"
 
 
 def _campbell_lines(c: dict) -> list[str]:
