@@ -18,7 +18,13 @@ from ..harmonics.sets import HarmonicSet, as_harmonic_set
 from ..system.periodic import PeriodicSystem
 from ..system.rigid_modes import held_rigid_modes as find_rigid_modes
 from . import large
-from .accuracy import DEFAULT_RTOL, leading_uncertainty, next_lattice, refine_leading
+from .accuracy import (
+    DEFAULT_RTOL,
+    leading_uncertainty,
+    next_lattice,
+    refine_leading,
+    refine_open,
+)
 from .band import BandAveraged, band_memory
 from .confirm import confirm_unresolved, open_rows
 from .continuation import Continuation
@@ -516,6 +522,17 @@ def _floquet_lattice(
             out.settle(out, np.flatnonzero(np.isnan(out.truncation)))
             out.settle = None  # it holds the lattice's operators
         res = _lattice_result(system, out, lattice, near, used, t0, modes)
+        if near is None and not res.decided and res.truncation_open().any():
+            # exponents whose truncation estimate alone keeps the verdict open: their
+            # clusters on finer lattices, near them only, before the whole lattice is
+            out, opened, need = refine_open(
+                system, out, lattice,
+                lambda o: _lattice_result(system, o, lattice, near, used, t0, modes),
+                budget, continuation,
+            )  # fmt: skip
+            used = max(used, need)
+            res = _lattice_result(system, out, lattice, near, used, t0, modes)
+            res.info["refined_near"] = opened
         if rtol is not None and near is None and (last or res.decided):
             out, accuracy = refine_leading(system, out, lattice, rtol, budget, continuation)
             res = _lattice_result(system, out, lattice, near, used, t0, modes)
