@@ -130,6 +130,7 @@ def refine_open(
     judge: Callable[[LatticeExponents], Any],
     budget: Any = None,
     continuation: Any = None,
+    finest: int | None = None,
 ) -> tuple[LatticeExponents, list[int], int]:
     """Decide a verdict that only the truncation estimates of some exponents keep open.
 
@@ -137,15 +138,15 @@ def refine_open(
     search on ``lattice``, confirmations made and truncation estimates settled); its
     :meth:`~rheolin.floquet.FloquetResult.truncation_open` exponents (resolved, within ten
     truncation estimates of the axis) have their clusters searched again on the lattice one
-    order above their own, near them only, up to :data:`OPEN_ORDERS` orders up and within
-    the memory budget. Where that lattice resolves a cluster with its full quota, its
-    exponents replace the coarse ones with their own truncation estimates, and the verdict
-    is judged by the same rules (agreement between orders certifies unresolved exponents
-    only, never these). The rest of the lattice is not searched again: its exponents are
-    decided by their own estimates. ``continuation`` (over a sweep): each search starts from
-    the previous speed's on its lattice, and is kept for the next speed when the verdict is
-    decided. Returns ``out``, the orders searched and the largest memory estimate among
-    them.
+    order above their own, near them only, up to :data:`OPEN_ORDERS` orders up, to the
+    order ``finest`` at most (None: no limit) and within the memory budget. Where that
+    lattice resolves a cluster with its full quota, its exponents replace the coarse ones
+    with their own truncation estimates, and the verdict is judged by the same rules
+    (agreement between orders certifies unresolved exponents only, never these). The rest
+    of the lattice is not searched again: its exponents are decided by their own estimates.
+    ``continuation`` (over a sweep): each search starts from the previous speed's on its
+    lattice, and is kept for the next speed when the verdict is decided. Returns ``out``,
+    the orders searched and the largest memory estimate among them.
     """
     orders: list[int] = []
     searches: list[tuple[Lattice, LatticeExponents]] = []
@@ -165,7 +166,7 @@ def refine_open(
             break
         todo = np.any([_cluster_rows(out, int(i), w) for i in rows], axis=0)
         order = max(lattice.order, int(out.order[rows].max())) + 1
-        finer = _order(lattice, order)
+        finer = _order(lattice, order) if finest is None or order <= finest else None
         if finer is None:
             break
         estimate = lattice_memory(system, finer)

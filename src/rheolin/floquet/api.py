@@ -524,11 +524,12 @@ def _floquet_lattice(
         res = _lattice_result(system, out, lattice, near, used, t0, modes)
         if near is None and not res.decided and res.truncation_open().any():
             # exponents whose truncation estimate alone keeps the verdict open: their
-            # clusters on finer lattices, near them only, before the whole lattice is
+            # clusters on finer lattices, near them only, before the whole lattice is (no
+            # finer than the top order's confirmations reach)
             out, opened, need = refine_open(
                 system, out, lattice,
                 lambda o: _lattice_result(system, o, lattice, near, used, t0, modes),
-                budget, continuation,
+                budget, continuation, max(MAX_AUTO_ORDER, lattice.order) + 2,
             )  # fmt: skip
             used = max(used, need)
             res = _lattice_result(system, out, lattice, near, used, t0, modes)
