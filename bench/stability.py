@@ -94,8 +94,8 @@ from pathlib import Path
 import numpy as np
 
 from _memory import reset_peak, status_kb
+from _runup import runup, runup_lines, splice
 
-HERE = Path(__file__).resolve().parent
 RPM = np.pi / 30
 
 
@@ -224,72 +224,6 @@ def _map(count: int) -> dict:
     }
 
 
-def _variant():  # type: ignore[no-untyped-def]
-    sys.path.insert(0, str(HERE.parent / "tests" / "stability"))
-    from gear_variants import reference_ranges, variant_document, variant_model
-
-    return variant_model(), variant_document()["harmonics"], reference_ranges()
-
-
-def _runup(step: float) -> dict:
-    import rheolin as rl
-    from rheolin.floquet import Continuation
-    from rheolin.results.compute import solve_point
-    from rheolin.stability import stability_map
-    from rheolin.study.run import MAP_PRECISION
-
-    model, harm, ref = _variant()
-    edges = ref["ranges"]["principal"]
-    lo, hi = edges["lower_rpm"], edges["upper_rpm"]
-    opts = {"order": harm["order"], "max_order": harm["max_order"], "stability": False}
-    solve_point(model, 3000 * RPM, **opts)  # warm-up
-    cont = Continuation()
-    previous = None
-    rows = []
-    for rpm in np.arange(3200.0, 4100.0 + step / 2, step):
-        c = time.process_time()
-        p = solve_point(model, rpm * RPM, x0=previous, **opts)
-        solve = time.process_time() - c
-        previous = p.solution if p.solution.success else None
-        c = time.process_time()
-        res = rl.floquet(p.assembled.system, continuation=cont)
-        verdict = time.process_time() - c
-        where = (
-            "inside"
-            if lo < rpm < hi
-            else ("near" if min(abs(rpm - lo), abs(rpm - hi)) <= 100 else "far")
-        )
-        rows.append(
-            {
-                "rpm": float(rpm),
-                "solve": solve,
-                "verdict": verdict,
-                "where": where,
-                "decided": bool(res.decided),
-                "stable": bool(res.stable),
-                "max_real": float(res.max_real),
-                "uncertainty": float(res.max_real_uncertainty),
-                "order": res.lattice.order if res.lattice is not None else None,
-                "accuracy": res.info.get("accuracy", {}).get("orders"),
-            }
-        )
-    samples = np.arange(3300.0, 4000.0 + 1.0, 100.0)
-    c = time.process_time()
-    smap = stability_map(model, samples * RPM, refine=MAP_PRECISION, rtol=np.inf)
-    map_cpu = time.process_time() - c
-    (r,) = smap.ranges
-    return {
-        "rows": rows,
-        "map_cpu": map_cpu,
-        "map_evaluations": smap.info.get("evaluations"),
-        "bounds": {
-            "lower": [r.lower / RPM, r.lower_uncertainty / RPM, lo, edges["lower_uncertainty_rpm"]],
-            "upper": [r.upper / RPM, r.upper_uncertainty / RPM, hi, edges["upper_uncertainty_rpm"]],
-        },
-        "states": smap.state.tolist(),
-    }
-
-
 def _campbell(step: float) -> dict:
     from rheolin.stability import campbell, stability_map
     from rheolin.study.run import MAP_PRECISION
@@ -378,13 +312,20 @@ def main() -> None:
             "verdict": _verdict,
             "orders": _orders,
             "map": _map,
-            "runup": _runup,
+            "runup": runup,
             "campbell": _campbell,
         }
         arg = int(value) if kind == "map" else float(value)
         print(json.dumps(workers[kind](arg)))
         return
     sections = a.sections.split(",")
+    if sections == ["runup"] and a.out and a.out.exists():
+        text = splice(a.out.read_text(), runup_lines(_run(["--worker", "runup", "25"])))
+        print(text)
+        tmp = a.out.with_suffix(".tmp")
+        tmp.write_text(text)
+        tmp.replace(a.out)
+        return
     lines = [
         "# Floquet stability of the embedded gearbox (bench/stability.py)",
         "",
@@ -396,7 +337,7 @@ def main() -> None:
     if "map" in sections:
         lines += _map_lines(_run(["--worker", "map", str(a.speeds)]))
     if "runup" in sections:
-        lines += _runup_lines(_run(["--worker", "runup", "25"]))
+        lines += runup_lines(_run(["--worker", "runup", "25"]))
     if "campbell" in sections:
         lines += _campbell_lines(_run(["--worker", "campbell", "250"]))
     text = "\n".join(lines) + "\n"
@@ -469,50 +410,6 @@ def _map_lines(m: dict) -> list[str]:
         lines.append(
             f"| {c['rpm']:.0f} | {c['order']} | {c['max_real']:.10g} | {c['fine_max_real']:.10g}"
             f" | {c['diff']:.2e} | {c['estimate']:.2e} |"
-        )
-    return lines
-
-
-def _runup_lines(u: dict) -> list[str]:
-    rows = u["rows"]
-    lines = [
-        "",
-        "## Run-up across an unstable range (gear variant, 72 DOFs, 3200-4100 rpm every 25 rpm)",
-        "",
-        "Principal parametric resonance of the polymer second mesh, unstable 3439.46-3877.13 rpm "
-        "(monodromy matrix). Per speed, CPU seconds; the verdict continued from the previous "
-        "speed as in a sweep, the solve from the previous solution.",
-        "",
-        "| where | speeds | solve [s] median | verdict [s] median / max | verdict / solve max | "
-        "decided |",
-        "|---|---|---|---|---|---|",
-    ]
-    for where in ("far", "near", "inside"):
-        sel = [r for r in rows if r["where"] == where]
-        if not sel:
-            continue
-        solve = np.array([r["solve"] for r in sel])
-        verdict = np.array([r["verdict"] for r in sel])
-        ratio = verdict / solve
-        lines.append(
-            f"| {where} | {len(sel)} | {np.median(solve):.2f} | {np.median(verdict):.2f} / "
-            f"{verdict.max():.2f} | {ratio.max():.1f}x | "
-            f"{sum(r['decided'] for r in sel)} of {len(sel)} |"
-        )
-    lines += [
-        "",
-        f"Map from samples every 100 rpm (3300-4000 rpm), bounds refined to 1e-5 by decided "
-        f"verdicts: {u['map_cpu']:.1f} CPU s, {u['map_evaluations']} Floquet evaluations "
-        "for the two edges.",
-        "",
-        "| edge | map [rpm] | stated uncertainty [rpm] | monodromy [rpm] | error | relative |",
-        "|---|---|---|---|---|---|",
-    ]
-    for side in ("lower", "upper"):
-        got, unc, ref, ref_unc = u["bounds"][side]
-        lines.append(
-            f"| {side} | {got:.6f} | {unc:.2g} | {ref:.6f} (+-{ref_unc:.1g}) | "
-            f"{got - ref:+.2g} | {abs(got - ref) / ref:.1e} |"
         )
     return lines
 

@@ -69,11 +69,12 @@ def test_backward_error_matches_its_definition_on_a_dense_operator():
 
 
 def test_undecided_verdict_is_said_on_the_console_and_in_summary_json(invoke, rotor, tmp_path):
-    """The example rotor with 1 % of its bearing damping (5 N s/m): the leading Floquet real
-    part, about -2e-4 1/s, lies inside the truncation estimate of the dense grid and of the
-    lattice alike, so neither can decide (the full damping is decided by the lattice)."""
-    light = rotor.read_text().replace('"500 N*s/m"', '"5 N*s/m"')
-    assert light.count('"5 N*s/m"') == 5
+    """The example rotor with 1e-4 of its bearing damping (0.05 N s/m): the leading Floquet
+    real part, about -2e-6 1/s, lies inside the truncation estimate of the dense grid and of
+    the lattice alike, so neither can decide (with 5 N s/m, -2e-4 1/s, the lattice decides
+    on finer lattices near it)."""
+    light = rotor.read_text().replace('"500 N*s/m"', '"0.05 N*s/m"')
+    assert light.count('"0.05 N*s/m"') == 5
     rotor.write_text(light)
     res = invoke("run", rotor, "--speed", "1000rpm", "--out", tmp_path / "o", "--no-plots")
     summary = json.loads((tmp_path / "o" / "summary.json").read_text())

@@ -10,6 +10,7 @@ rows), until its stated uncertainty meets ``rtol |max_real|``.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -24,11 +25,13 @@ from .search import lattice_memory
 
 __all__ = [
     "DEFAULT_RTOL",
+    "OPEN_ORDERS",
     "RTOL_ORDERS",
     "ZETA_FLOOR",
     "leading_uncertainty",
     "next_lattice",
     "refine_leading",
+    "refine_open",
     "target",
 ]
 
@@ -37,6 +40,10 @@ DEFAULT_RTOL = 1e-4
 
 #: At most this many refinement steps (lattice orders) per verdict.
 RTOL_ORDERS = 3
+
+#: Orders above their own at which :func:`refine_open` searches the exponents that keep a
+#: verdict open, near them only.
+OPEN_ORDERS = 2
 
 #: A real part near zero has no relative accuracy: the target is ``rtol`` times the larger
 #: of ``|Re|`` and this damping ratio times ``|lambda|`` (0.1 %).
@@ -114,6 +121,65 @@ def refine_leading(
         if leading_uncertainty(out, j) >= unc:  # not better: keep the coarse exponents
             out = before
     return out, info
+
+
+def refine_open(
+    system: PeriodicSystem,
+    out: LatticeExponents,
+    lattice: Lattice,
+    judge: Callable[[LatticeExponents], Any],
+    budget: Any = None,
+    continuation: Any = None,
+    finest: int | None = None,
+) -> tuple[LatticeExponents, list[int], int]:
+    """Decide a verdict that only the truncation estimates of some exponents keep open.
+
+    ``judge(out)`` is the :class:`~rheolin.floquet.FloquetResult` of ``out`` (the verdict's
+    search on ``lattice``, confirmations made and truncation estimates settled); its
+    :meth:`~rheolin.floquet.FloquetResult.truncation_open` exponents (resolved, within ten
+    truncation estimates of the axis) have their clusters searched again on the lattice one
+    order above their own, near them only, up to :data:`OPEN_ORDERS` orders up, to the
+    order ``finest`` at most (None: no limit) and within the memory budget. Where that
+    lattice resolves a cluster with its full quota, its exponents replace the coarse ones
+    with their own truncation estimates, and the verdict is judged by the same rules
+    (agreement between orders certifies unresolved exponents only, never these). The rest
+    of the lattice is not searched again: its exponents are decided by their own estimates.
+    ``continuation`` (over a sweep): each search starts from the previous speed's on its
+    lattice, and is kept for the next speed when the verdict is decided. Returns ``out``,
+    the orders searched and the largest memory estimate among them.
+    """
+    orders: list[int] = []
+    searches: list[tuple[Lattice, LatticeExponents]] = []
+    used = 0
+    limit = resolve_budget(budget)
+    n, w = system.n, system.omega
+    for step in range(OPEN_ORDERS + 1):
+        verdict = judge(out)
+        rank = np.argsort(-out.exponents.real, kind="stable")  # the result's order
+        rows = rank[verdict.truncation_open()]
+        if verdict.decided and continuation is not None:
+            # kept only when they decide: else the whole lattice is searched at the next
+            # order, better started from the previous speed's search of all of it
+            for kept_lattice, kept in searches:
+                continuation.keep(n, kept_lattice, kept)
+        if verdict.decided or rows.size == 0 or step == OPEN_ORDERS:
+            break
+        todo = np.any([_cluster_rows(out, int(i), w) for i in rows], axis=0)
+        order = max(lattice.order, int(out.order[rows].max())) + 1
+        finer = _order(lattice, order) if finest is None or order <= finest else None
+        if finer is None:
+            break
+        estimate = lattice_memory(system, finer)
+        if estimate > limit:
+            break
+        used = max(used, estimate)
+        previous = continuation.start(n, finer) if continuation is not None else None
+        out, fine = confirm_unresolved(system, out, finer, previous, todo=todo)
+        out.info.pop("confirmed", None)
+        orders.append(order)
+        if fine is not None:
+            searches.append((finer, fine))
+    return out, orders, used
 
 
 def _cluster_rows(out: LatticeExponents, row: int, w: float) -> np.ndarray:

@@ -18,9 +18,15 @@ from ..harmonics.sets import HarmonicSet, as_harmonic_set
 from ..system.periodic import PeriodicSystem
 from ..system.rigid_modes import held_rigid_modes as find_rigid_modes
 from . import large
-from .accuracy import DEFAULT_RTOL, leading_uncertainty, next_lattice, refine_leading
+from .accuracy import (
+    DEFAULT_RTOL,
+    leading_uncertainty,
+    next_lattice,
+    refine_leading,
+    refine_open,
+)
 from .band import BandAveraged, band_memory
-from .confirm import confirm_unresolved
+from .confirm import confirm_unresolved, open_rows
 from .continuation import Continuation
 from .dense import floquet_dense
 from .resonance import floquet_lattice
@@ -485,12 +491,12 @@ def _floquet_lattice(
         )
         if continuation is not None and near is None:
             continuation.keep(system.n, lattice, out)
-        # unresolved exponents: search their clusters again on finer lattices (p + 1, p + 2),
-        # only near them, as long as the memory budget allows
+        # unresolved exponents and clusters short of theirs: search those clusters again on
+        # finer lattices (p + 1, p + 2), only near them, as long as the memory budget allows
         finer: Lattice | None = lattice
         steps: list[Any] = []
         used = est  # the largest lattice's estimate: what the verdict needed
-        while near is None and np.any(out.unresolved & ~out.certified) and len(steps) < 2:
+        while near is None and np.any(open_rows(out, system.omega)) and len(steps) < 2:
             finer = next_lattice(finer) if finer is not None else None
             if finer is None:
                 break
@@ -516,6 +522,18 @@ def _floquet_lattice(
             out.settle(out, np.flatnonzero(np.isnan(out.truncation)))
             out.settle = None  # it holds the lattice's operators
         res = _lattice_result(system, out, lattice, near, used, t0, modes)
+        if near is None and not res.decided and res.truncation_open().any():
+            # exponents whose truncation estimate alone keeps the verdict open: their
+            # clusters on finer lattices, near them only, before the whole lattice is (no
+            # finer than the top order's confirmations reach)
+            out, opened, need = refine_open(
+                system, out, lattice,
+                lambda o: _lattice_result(system, o, lattice, near, used, t0, modes),
+                budget, continuation, max(MAX_AUTO_ORDER, lattice.order) + 2,
+            )  # fmt: skip
+            used = max(used, need)
+            res = _lattice_result(system, out, lattice, near, used, t0, modes)
+            res.info["refined_near"] = opened
         if rtol is not None and near is None and (last or res.decided):
             out, accuracy = refine_leading(system, out, lattice, rtol, budget, continuation)
             res = _lattice_result(system, out, lattice, near, used, t0, modes)

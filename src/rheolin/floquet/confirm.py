@@ -14,7 +14,7 @@ from .result import TRUNCATION_SAFETY
 from .search import lattice_exponents
 from .select import CLUSTER_TOL
 
-__all__ = ["confirm_unresolved", "snapshot"]
+__all__ = ["confirm_unresolved", "open_rows", "short_rows", "snapshot"]
 
 
 def confirm_unresolved(
@@ -24,15 +24,17 @@ def confirm_unresolved(
     previous: LatticeExponents | None = None,
     todo: np.ndarray | None = None,
 ) -> tuple[LatticeExponents, LatticeExponents | None]:
-    """Settle the unresolved, uncertified representatives (or the rows ``todo``) on a finer
-    lattice.
+    """Settle the unresolved, uncertified representatives and the clusters short of their
+    exponents (:func:`open_rows`; or the rows ``todo``) on a finer lattice.
 
     Their clusters are searched again on ``finer`` (only near them), each from its coarse
     eigenvectors, shifted to its coarse exponents: the continuation converges in a few
     Arnoldi steps (a cold search of a strongly mixed cluster runs to the last checkpoint
     without meeting its quota). Where the finer lattice
     resolves a cluster, its exponents replace the coarse ones (each exponent keeps its own
-    ``order``); where it does not either, the cluster is confirmed when its largest real
+    ``order``; a short cluster's when the finer lattice finds all of them, never more
+    exponents than the averaged system has); where it does not either, the cluster is
+    confirmed when its largest real
     part is negative at both orders and changes by less than ``1 / TRUNCATION_SAFETY`` of
     its size (the verdict does not move with the truncation). Records
     ``info["confirmed"]``.
@@ -67,6 +69,39 @@ def confirm_unresolved(
     return got, fine
 
 
+def short_rows(out: LatticeExponents, w: float) -> np.ndarray:
+    """The rows of the clusters with fewer exponents than their averaged modes, when the
+    search is short of exponents (``complete`` False): inside a parametric resonance the
+    search continued from the previous speed can keep the decaying exponent of a locked
+    pair and miss the growing one, whose cluster is searched again on a finer lattice."""
+    mask = np.zeros(out.exponents.size, dtype=bool)
+    if out.complete:
+        return mask
+    for z in np.unique(out.centre[np.isfinite(out.centre)]):
+        rows = _members(out.centre, z, w)
+        if rows.sum() < _quota(out, z, w):
+            mask |= rows
+    return mask
+
+
+def open_rows(out: LatticeExponents, w: float) -> np.ndarray:
+    """The rows a finer lattice is to settle: unresolved and uncertified, or of a cluster
+    short of its exponents (:func:`short_rows`)."""
+    return (out.unresolved & ~out.certified) | short_rows(out, w)
+
+
+def _members(arr: np.ndarray, z: complex, w: float) -> np.ndarray:
+    """The entries of ``arr`` in the cluster centred at ``z`` or at its conjugate."""
+    tol = CLUSTER_TOL * max(abs(z), w)
+    return np.asarray((np.abs(arr - z) <= tol) | (np.abs(arr - np.conj(z)) <= tol))
+
+
+def _quota(out: LatticeExponents, z: complex, w: float) -> int:
+    """The exponents of the cluster centred at ``z``, conjugates included: one per averaged
+    exponent in it or in its conjugate cluster."""
+    return int(_members(out.averaged, z, w).sum())
+
+
 def _open(out: LatticeExponents) -> tuple[int, int]:
     """What is left open: exponents missing (no finer lattice looks for them again), then
     unresolved, uncertified ones (a finer lattice may settle them)."""
@@ -92,8 +127,9 @@ def _confirm(
     todo: np.ndarray | None,
 ) -> tuple[LatticeExponents, LatticeExponents | None]:
     """:func:`confirm_unresolved` from one start."""
+    w = system.omega
     if todo is None:
-        todo = out.unresolved & ~out.certified
+        todo = open_rows(out, w)
     if not todo.any():
         out.info["confirmed"] = {"order": finer.order, "clusters": 0, "replaced": 0, "confirmed": 0}
         return out, None
@@ -128,12 +164,26 @@ def _confirm(
     replaced = confirmed = 0
 
     def members(arr: np.ndarray, z: complex) -> np.ndarray:
-        tol = CLUSTER_TOL * max(abs(z), system.omega)
-        return (np.abs(arr - z) <= tol) | (np.abs(arr - np.conj(z)) <= tol)
+        return _members(arr, z, w)
+
+    def replaces(mine: np.ndarray, there: np.ndarray, zs: np.ndarray) -> bool:
+        # resolved, and as many as the coarse rows, or exactly the clusters' quotas (a coarse
+        # cluster short of an exponent, or holding a copy counted as another one) without
+        # more exponents in all than the averaged system has
+        if not there.any() or fine.unresolved[there].any():
+            return False
+        got, had = int(there.sum()), int(mine.sum())
+        if got == had:
+            return True
+        zs = np.unique(np.where(zs.imag < 0, np.conj(zs), zs))
+        if got != sum(_quota(out, z, w) for z in zs):
+            return False
+        total = int(keep.sum() - (keep & mine).sum() + take.sum() + (there & ~take).sum())
+        return got < had or total <= out.expected
 
     every = np.any([members(out.centre, z) for z in centres], axis=0)
     there_all = np.any([members(fine.centre, z) for z in centres], axis=0)
-    if not fine.unresolved[there_all].any() and there_all.sum() == every.sum():
+    if replaces(every, there_all, centres):
         # the finer lattice resolves every cluster: take all of them (their attribution to
         # one cluster or another may differ between orders; the set is what counts)
         keep &= ~every
@@ -146,7 +196,7 @@ def _confirm(
         if not there.any():
             left.append(z)
             continue
-        if not fine.unresolved[there].any() and there.sum() == mine.sum():
+        if replaces(mine, there, np.array([z])):
             keep &= ~mine
             take |= there
             replaced += 1

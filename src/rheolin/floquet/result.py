@@ -191,9 +191,24 @@ class FloquetResult:
         return bool(np.all(~loose | clear))
 
     def _decided_lattice(self) -> bool:
-        if not self.complete:
-            return False
+        return self._lattice_verdict()[0]
+
+    def truncation_open(self) -> np.ndarray:
+        """Lattice method: the exponents (this result's order) whose truncation estimate
+        alone keeps the verdict open, so that a finer lattice near them may decide it;
+        none when the verdict is decided or open for another reason (an exponent missing
+        or unresolved, Liouville's identity, a band's bound)."""
+        if self.method != "lattice":
+            return np.zeros(self.exponents.size, dtype=bool)
+        return self._lattice_verdict()[1]
+
+    def _lattice_verdict(self) -> tuple[bool, np.ndarray]:
+        """Whether the lattice verdict is decided, and the exponents whose truncation keeps
+        it open (see :meth:`truncation_open`)."""
         lam, tol = self.exponents, self.tolerances
+        none = np.zeros(lam.size, dtype=bool)
+        if not self.complete:
+            return False, none
         reach = TRUNCATION_SAFETY * self.truncation
         # Liouville: the real parts of all 2 n exponents sum to -mean tr(M^-1 D); a truncation
         # that moved exponents more than their estimates say shows here
@@ -210,24 +225,27 @@ class FloquetResult:
             total += float(np.sum(pair * skipped.real))
             slack += float(np.sum(pair * radii))
             if abs(total - target) > slack:
-                return False
+                return False, none
+        unresolved = self.info.get("unresolved", np.zeros(lam.size, bool))
         if not self.stable:
-            sure = (lam.real > tol + reach) & ~self.info.get("unresolved", np.zeros(lam.size, bool))
-            return bool(np.any(sure))
+            sure = (lam.real > tol + reach) & ~unresolved
+            if np.any(sure):
+                return True, none
+            return False, (lam.real > tol) & ~unresolved
         # a band of a large model: the modes left out must be bounded (docs/stability.md, 8)
         band = self.info.get("band")
         if band and not band.get("certified", False):
-            return False
+            return False, none
         gap = self.info.get("split_gap", np.full(lam.size, np.inf))
         near_split = gap < 2.0 * reach
         loose = self.truncation > tol
-        unresolved = self.info.get("unresolved", np.zeros(lam.size, bool))
         certified = self.info.get("certified", np.zeros(lam.size, bool))
         if np.any(unresolved & ~certified):
-            return False
+            return False, none
         split_clear = lam.real + SPLIT_FACTOR * (reach + gap) < 0
         clear = np.where(near_split, split_clear, lam.real + reach < 0)
-        return bool(np.all(~loose | clear | certified))
+        blocking = loose & ~clear & ~certified
+        return not bool(np.any(blocking)), blocking
 
     @property
     def leading(self) -> complex:
