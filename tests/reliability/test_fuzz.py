@@ -31,7 +31,7 @@ def _small_budget(monkeypatch, tmp_path):
     monkeypatch.setenv("RHEOLIN_MEMORY_BUDGET", "256 MB")
 
 
-@settings(FUZZ, max_examples=250)
+@settings(FUZZ, max_examples=100)
 @given(text=mutated_model())
 def test_mutated_model_files_are_refused_naming_a_field_or_valid(invoke, tmp_path, text):
     path = tmp_path / "m.toml"

@@ -23,7 +23,8 @@ sys.path.insert(0, str(Path(__file__).parents[1] / "cli"))
 from study_cases import BAND, ctrl_c_reaches_python
 from test_cli import ENV, cli
 
-SWEEP = ["--speeds", "850:1250:4rpm", "--chunk-size", "3"]  # 101 points, the band inside
+POINTS = 51
+SWEEP = ["--speeds", "850:1250:8rpm", "--chunk-size", "3"]  # 51 points, the band inside
 
 
 def command(model: Path, out: Path, *extra: str) -> list[str]:
@@ -55,7 +56,7 @@ def _check_readable(out: Path) -> set[int]:
         return set()
     for p in ckpt.iterdir():
         if p.name == "manifest.json":
-            assert json.loads(p.read_text())["points"] == 101
+            assert json.loads(p.read_text())["points"] == POINTS
         elif p.name.startswith("chunk-"):
             ds = read_chunk(p)
             assert set(floquet_results(ds)) == set(ds["point"].values.tolist())
@@ -71,7 +72,7 @@ def test_sigkill_at_random_moments_then_resume(band, uninterrupted, tmp_path):
     out = tmp_path / "out"
     done: set[int] = set()
     killed = 0
-    for round_ in range(5):
+    for round_ in range(4):
         workers = "2" if round_ % 2 else "1"  # serial and on a local Dask cluster
         proc = subprocess.Popen(
             command(band, out, *SWEEP, "--workers", workers),
@@ -81,7 +82,7 @@ def test_sigkill_at_random_moments_then_resume(band, uninterrupted, tmp_path):
         )
         # wait for a random number of new chunk files (or a random early moment), then a
         # random fraction of a chunk more: kills land in start-up, solves and writes
-        # (17 chunks in all: the continuation blocks hold 6 speeds; at most 2 per round
+        # (9 chunks in all: the continuation blocks hold 6 speeds; at most 2 per round
         # leave work for every round)
         wanted = int(rng.integers(0, 3))
         start = len(list((out / "checkpoint").glob("chunk-*.nc"))) if out.exists() else 0
@@ -104,9 +105,9 @@ def test_sigkill_at_random_moments_then_resume(band, uninterrupted, tmp_path):
         command(band, out, *SWEEP), env=ENV, capture_output=True, text=True, timeout=600
     )
     assert final.returncode == 1, final.stderr  # unstable points, as uninterrupted
-    assert f"resumed: {len(done)} of 101 points already done" in final.stderr
+    assert f"resumed: {len(done)} of {POINTS} points already done" in final.stderr
     assert not [p for p in out.rglob("*.tmp")]  # stale temporary files removed
-    assert _check_readable_final(out) == set(range(101))
+    assert _check_readable_final(out) == set(range(POINTS))
     for name in ("sweep.nc", "stability_map.nc"):
         a = xr.open_dataset(out / name).drop_vars("seconds", errors="ignore")
         b = xr.open_dataset(uninterrupted / name).drop_vars("seconds", errors="ignore")
@@ -114,7 +115,7 @@ def test_sigkill_at_random_moments_then_resume(band, uninterrupted, tmp_path):
     a = json.loads((out / "sweep.json").read_text())
     b = json.loads((uninterrupted / "sweep.json").read_text())
     assert a["unstable_ranges"] == b["unstable_ranges"] and len(a["unstable_ranges"]) == 1
-    assert a["points"]["resumed"] == len(done) and a["points"]["total"] == 101
+    assert a["points"]["resumed"] == len(done) and a["points"]["total"] == POINTS
 
 
 def _check_readable_final(out: Path) -> set[int]:
@@ -148,7 +149,7 @@ def test_ctrl_c_keeps_the_finished_chunks(band, uninterrupted, tmp_path):
     kept = _check_readable(out)
     assert len(kept) >= 9  # the three chunks seen before the interrupt
     final = cli("sweep", str(band), "--out", str(out), *SWEEP, "--workers", "1")
-    assert f"resumed: {len(kept)} of 101" in final.stderr
+    assert f"resumed: {len(kept)} of {POINTS}" in final.stderr
     a = xr.open_dataset(out / "sweep.nc").drop_vars("seconds")
     b = xr.open_dataset(uninterrupted / "sweep.nc").drop_vars("seconds")
     xr.testing.assert_identical(a, b)
@@ -232,8 +233,9 @@ def test_sweep_reports_resonances_with_their_amplification_factor(tmp_path):
     assert ISO != BAND
     (tmp_path / "iso.toml").write_text(ISO)
     out = tmp_path / "s"
-    res = cli("sweep", str(tmp_path / "iso.toml"), "--speeds", "600:1400:4rpm", "--stability",
-              "off", "--workers", "1", "--no-plots", "--out", str(out))  # fmt: skip
+    res = cli("sweep", str(tmp_path / "iso.toml"), "--speeds", "600:1400:4rpm",
+              "--stability", "off", "--no-stability-map", "--workers", "1", "--no-plots",
+              "--out", str(out))  # fmt: skip
     assert res.returncode == 0, res.stdout + res.stderr
     assert "resonances (half-power amplification factor, API 684): r (" in res.stdout
     (peak,) = json.loads((out / "sweep.json").read_text())["resonances"]

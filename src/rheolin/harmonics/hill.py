@@ -91,46 +91,55 @@ def hill_pencil(
         sq, sv = state_scaling(system)
     else:
         sq, sv = np.ones(n), np.ones(n)
-    Tq, Tv = sp.diags_array(1.0 / sq), sp.diags_array(1.0 / sv)
-
-    def scaled(table: dict[int, Any], right: Any) -> dict[int, sp.csr_array]:
-        return {k: sp.csr_array(Tv @ sp.csr_array(x) @ right) for k, x in table.items()}
-
-    Ms, Ds, Ks = scaled(system.M, Tv), scaled(system.D, Tv), scaled(system.K, Tq)
-    eye = sp.identity(n, dtype=complex, format="csr")
-    coupling = sp.diags_array((sq / sv).astype(complex))
-    top = sp.csr_array(([1.0], ([0], [0])), shape=(2, 2))  # the (q, q) quadrant
-    low = sp.csr_array(([1.0], ([1], [1])), shape=(2, 2))  # the (v, v) quadrant
-    lq = sp.csr_array(([1.0], ([1], [0])), shape=(2, 2))  # the (v, q) quadrant
-    hq = sp.csr_array(([1.0], ([0], [1])), shape=(2, 2))  # the (q, v) quadrant
+    tq, tv = 1.0 / sq, 1.0 / sv
+    nh = H.size
     Hf = H.astype(float)
-    A = sp.kron(sp.diags_array(-1j * w * Hf), sp.kron(top, eye)) + sp.kron(
-        sp.identity(H.size), sp.kron(hq, coupling)
-    )
-    B = sp.kron(sp.identity(H.size), sp.kron(top, eye))
-    for k in set(Ms) | set(Ds) | set(Ks):
-        # shift[i, j] = 1 where H[i] - H[j] == k: row harmonic m couples to column m - k
-        # (sorted search: linear in |H|, never an |H| x |H| comparison)
-        cols = np.arange(H.size)
-        pos = np.minimum(np.searchsorted(H, H + k), H.size - 1)
+    spin = 1j * w * Hf  # i n w1 of each harmonic
+    base = 2 * n * np.arange(nh, dtype=np.int64)  # first row of each harmonic's block
+    a = np.arange(n, dtype=np.int64)
+    # per harmonic: -i n w1 on the (q, q) diagonal and the balanced identity sq / sv in (q, v)
+    rows = [(base[:, None] + a).ravel(), (base[:, None] + a).ravel()]
+    cols = [(base[:, None] + a).ravel(), (base[:, None] + n + a).ravel()]
+    vals = [np.repeat(-spin, n), np.tile((sq / sv).astype(complex), nh)]
+    brows, bcols = [(base[:, None] + a).ravel()], [(base[:, None] + a).ravel()]
+    bvals = [np.ones(nh * n, dtype=complex)]
+    tables = (system.K, system.D, system.M)
+    for k in sorted(set().union(*tables)):
+        # row harmonic m couples to column m - k (sorted search: linear in |H|)
+        col_h = np.arange(nh)
+        pos = np.minimum(np.searchsorted(H, H + k), nh - 1)
         hit = H[pos] == H + k
-        rows, cols = pos[hit], cols[hit]
-        if rows.size == 0:
+        row_h, col_h = pos[hit], col_h[hit]
+        if row_h.size == 0:
             continue
-        shift = sp.csr_array((np.ones(rows.size), (rows, cols)), shape=(H.size, H.size))
-        if k in Ks:
-            A = A - sp.kron(shift, sp.kron(lq, Ks[k]))
-        if k in Ds:
-            A = A - sp.kron(shift, sp.kron(low, Ds[k]))
-        if k in Ms:
+        r0 = (base[row_h] + n)[:, None]  # the v rows of the row harmonic
+        for table, right, into_v in ((system.K, tq, False), (system.D, tv, True)):
+            if k in table:
+                r, c, v = scaled_entries(table[k], tv, right)
+                rows.append((r0 + r).ravel())
+                cols.append((base[col_h][:, None] + (n if into_v else 0) + c).ravel())
+                vals.append(np.broadcast_to(-v.astype(complex), (row_h.size, v.size)).ravel())
+        if k in system.M:
+            r, c, v = scaled_entries(system.M[k], tv, tv)
+            vr, vc = (r0 + r).ravel(), (base[col_h][:, None] + n + c).ravel()
             # the column harmonic n = H[j] multiplies M_{m-n}
-            A = A - sp.kron(shift @ sp.diags_array(1j * w * Hf), sp.kron(low, Ms[k]))
-            B = B + sp.kron(shift, sp.kron(low, Ms[k]))
-    A = sp.csc_array(A, dtype=complex)
-    B = sp.csc_array(B, dtype=complex)
-    A.eliminate_zeros()
-    B.eliminate_zeros()
-    return sp.csc_array(A), sp.csc_array(B)
+            rows.append(vr)
+            cols.append(vc)
+            vals.append((-(spin[col_h][:, None] * v)).ravel())
+            brows.append(vr)
+            bcols.append(vc)
+            bvals.append(np.broadcast_to(v.astype(complex), (row_h.size, v.size)).ravel())
+    size = 2 * n * nh
+
+    def assemble(r: list[np.ndarray], c: list[np.ndarray], v: list[np.ndarray]) -> sp.csc_array:
+        out = sp.csc_array(
+            (np.concatenate(v), (np.concatenate(r), np.concatenate(c))), shape=(size, size)
+        )
+        out.sum_duplicates()
+        out.eliminate_zeros()
+        return out
+
+    return assemble(rows, cols, vals), assemble(brows, bcols, bvals)
 
 
 def hill_matrices(system: PeriodicSystem, harmonics: HarmonicSet) -> tuple[np.ndarray, ...]:
