@@ -1,11 +1,12 @@
-"""The real CLI in a subprocess: results reopened with xarray and compared with the Python API;
-broken files refused with exit status 2 and a message naming the field; atomic writes."""
+"""The CLI: results reopened with xarray and compared with the Python API; broken files refused
+with exit status 2 and a message naming the field; atomic writes.
+
+Commands run in this process (tests/run_cli.py), the run of the shared fixture through
+``python -m rheolin.cli``."""
 
 from __future__ import annotations
 
 import json
-import os
-import subprocess
 import sys
 import tomllib
 from pathlib import Path
@@ -25,7 +26,7 @@ sys.path.insert(0, str(Path(__file__).parents[1] / "study"))
 from study_cases import BAND
 from test_loader import SMALL, _broken
 
-ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "COLUMNS": "120"}
+from run_cli import cli, cli_process
 
 
 @pytest.fixture(autouse=True)
@@ -34,22 +35,11 @@ def _allow_underflow():
         yield
 
 
-def cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "rheolin.cli", *args],
-        capture_output=True,
-        text=True,
-        env=ENV,
-        cwd=cwd,
-        timeout=300,
-    )
-
-
 @pytest.fixture(scope="module")
 def small_run(tmp_path_factory):
     d = tmp_path_factory.mktemp("run")
     (d / "model.toml").write_text(SMALL)
-    res = cli(
+    res = cli_process(  # the entry point itself: a real process writes the run's files
         "run",
         str(d / "model.toml"),
         "--speed",

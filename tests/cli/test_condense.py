@@ -5,9 +5,6 @@ field."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 import scipy.io as sio
@@ -15,6 +12,7 @@ import scipy.linalg as sla
 
 pytest.importorskip("skfem")
 from rheolin.fe.solid import solid_model, tensor_block
+from run_cli import cli
 
 L = 0.3
 SPEC = """
@@ -38,15 +36,6 @@ reference = ["300 mm", "25 mm", "20 mm"]
 kind = "average"
 sphere = { centre = ["300 mm", "25 mm", "20 mm"], radius = "40 mm" }
 """
-
-
-def cli(*args: str, cwd=None) -> subprocess.CompletedProcess:  # type: ignore[no-untyped-def]
-    return subprocess.run(
-        [sys.executable, "-c", "from rheolin.cli import main; main()", *args],
-        capture_output=True,
-        text=True,
-        cwd=cwd,
-    )
 
 
 @pytest.fixture(scope="module")

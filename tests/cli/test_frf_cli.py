@@ -1,25 +1,24 @@
-"""``rheolin frf`` in a subprocess: the peaks it prints sit at the damped natural frequencies
+"""``rheolin frf``: the peaks it prints sit at the damped natural frequencies
 of the model's modes (an eigenvalue solve: a different computation from the FRF's linear
 solves), the files reopen, and bad options exit 2 naming the option."""
 
 from __future__ import annotations
 
-import os
+import functools
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 import xarray as xr
 
+import run_cli
 from rheolin.io import parse_model
 from rheolin.results import complex_values
 from rheolin.results.units import missing_units
 from rheolin.stability import averaged_modes
 
-ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "COLUMNS": "160"}
+cli = functools.partial(run_cli.cli, columns=160)
 
 ROTOR = """
 [model]
@@ -45,16 +44,6 @@ node = 2
 stiffness = "2e7 N/m"
 damping = "300 N*s/m"
 """
-
-
-def cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "rheolin.cli", *args],
-        capture_output=True,
-        text=True,
-        env=ENV,
-        timeout=300,
-    )
 
 
 def test_frf_peaks_at_the_damped_natural_frequencies(tmp_path: Path) -> None:

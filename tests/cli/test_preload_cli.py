@@ -12,9 +12,8 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
-from test_cli import cli
-
 from rheolin.data import example_text
+from run_cli import cli
 
 PAIR = example_text("preloaded")
 

@@ -1,23 +1,19 @@
-"""Shared helpers of the report tests: the CLI in a subprocess."""
+"""Shared helpers of the report tests: the CLI in this process, the study cases."""
 
 from __future__ import annotations
 
 import importlib.util
-import os
-import subprocess
 import sys
 from pathlib import Path
 from typing import Any
 
-ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "COLUMNS": "160"}
-
 
 def run_cli(*args: str, cwd: Path | None = None) -> Any:
-    """``rheolin ARGS`` in a subprocess (text output, 10 minutes at most)."""
-    return subprocess.run(
-        [sys.executable, "-m", "rheolin.cli", *args],
-        capture_output=True, text=True, env=ENV, timeout=600, cwd=cwd,
-    )  # fmt: skip
+    """``rheolin ARGS`` in this process (tests/run_cli.py), 160 columns."""
+    sys.path.insert(0, str(Path(__file__).parents[1]))
+    from run_cli import cli
+
+    return cli(*args, cwd=cwd, columns=160)
 
 
 def study_cases() -> Any:

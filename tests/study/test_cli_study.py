@@ -19,9 +19,9 @@ import xarray as xr
 from rheolin.study.chunks import floquet_results, read_chunk
 
 sys.path.insert(0, str(Path(__file__).parent))
-sys.path.insert(0, str(Path(__file__).parents[1] / "cli"))
 from study_cases import BAND, ctrl_c_reaches_python
-from test_cli import ENV, cli
+
+from run_cli import ENV, cli
 
 POINTS = 51
 SWEEP = ["--speeds", "850:1250:8rpm", "--chunk-size", "3"]  # 51 points, the band inside

@@ -272,8 +272,7 @@ def test_chunk_files_are_self_contained(serial, band_file, tmp_path):
 def test_the_cli_runs_on_an_existing_cluster(serial, band_file, client, tmp_path):
     """``rheolin sweep --scheduler ADDRESS``: the same results as the serial study; the
     cluster stays up for its owner."""
-    sys.path.insert(0, str(Path(__file__).parents[1] / "cli"))
-    from test_cli import cli
+    from run_cli import cli
 
     address = client.scheduler.address
     res = cli(
