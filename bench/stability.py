@@ -70,7 +70,7 @@ says more (``git show <commit>``).
 * ``api.DEFAULT_LATTICE_ORDER`` (f615442): order 1 decides the gearbox in 1.0 s against
   2.4 s at order 2, the same verdict and largest real part to 1e-11 (section (b) of this
   bench).
-* ``api._single_thread_blas`` (96d8b06): the lattice kernels are many small products; with
+* ``lattice_run.single_thread_blas`` (96d8b06): the lattice kernels are many small products; with
   two BLAS threads the verdict took twice as long.
 * ``averaged.STANDARD_COND`` (9a1373b): the time-averaged modes by ``B^-1 A`` take 0.05 s
   against 0.25 s by QZ (252 x 252).

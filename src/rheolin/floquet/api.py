@@ -4,15 +4,12 @@ memory budget.
 
 from __future__ import annotations
 
-import logging
-import time
 from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
 
-from ..budget import MemoryBudgetError, format_bytes
-from ..budget import memory_budget as resolve_budget
+from ..budget import MemoryBudgetError
 from ..harmonics.lattice import Lattice, system_lattice
 from ..harmonics.sets import HarmonicSet, as_harmonic_set
 from ..system.periodic import PeriodicSystem
@@ -20,18 +17,18 @@ from ..system.rigid_modes import held_rigid_modes as find_rigid_modes
 from . import large
 from .accuracy import (
     DEFAULT_RTOL,
-    leading_uncertainty,
-    next_lattice,
-    refine_leading,
-    refine_open,
 )
-from .band import BandAveraged, band_memory
-from .confirm import confirm_unresolved, open_rows
 from .continuation import Continuation
 from .dense import floquet_dense
-from .resonance import floquet_lattice
-from .result import FloquetResult, floquet_result
-from .search import lattice_exponents, lattice_memory
+from .lattice_run import (
+    DEFAULT_LATTICE_ORDER,
+    MAX_AUTO_ORDER,
+    check_budget,
+    floquet_on_lattice,
+    lattice_auto,
+)
+from .result import FloquetResult
+from .search import lattice_memory
 from .sparse import floquet_sparse
 
 __all__ = [
@@ -44,27 +41,12 @@ __all__ = [
     "floquet_memory",
 ]
 
-log = logging.getLogger(__name__)
-
-
 #: Dense Hill matrices beyond this size are refused (sparse shift-invert is the way there).
 MAX_DENSE_HILL = 6000
 
 
 #: ``method="auto"`` uses the dense path up to this Hill size, the sparse one beyond.
 AUTO_DENSE_LIMIT = 1500
-
-
-#: First lattice order of ``floquet(system)``; raised one order at a time, up to
-#: :data:`MAX_AUTO_ORDER`, while the verdict is undecided (and the larger lattice fits the
-#: memory budget). Its unresolved exponents are already continued on orders ``p + 1`` and
-#: ``p + 2`` near them, so the coarse lattice decides most systems, faster than a finer one
-#: and with the same verdict (bench/stability.py, design notes).
-DEFAULT_LATTICE_ORDER = 1
-
-
-#: Highest order ``floquet(system)`` raises the lattice to by itself.
-MAX_AUTO_ORDER = 3
 
 
 #: The largest dense Hill truncation ``N`` (``-N..N``) accepted before its size is even
@@ -254,7 +236,7 @@ def _floquet(
                 f"a Lattice truncation needs method='lattice' (or 'auto'), got {method!r}"
             )
         modes = large.certified_band(system, band, budget, harmonics.order) if banded else None
-        return _floquet_lattice(
+        return floquet_on_lattice(
             system,
             harmonics,
             budget=budget,
@@ -264,7 +246,7 @@ def _floquet(
             rtol=rtol,
         )
     if banded and method in ("auto", "lattice") and harmonics is None:
-        return _lattice_auto(
+        return lattice_auto(
             system,
             order,
             budget,
@@ -282,7 +264,7 @@ def _floquet(
                 "method='lattice' builds its own truncation: pass `order` (and no `harmonics`), "
                 "or a rheolin.harmonics.lattice.Lattice as `harmonics`"
             )
-        return _lattice_auto(
+        return lattice_auto(
             system,
             order,
             budget,
@@ -299,7 +281,7 @@ def _floquet(
                 method == "auto"
                 and 2 * system.n * (2 * _dense_order(system) + 1) > AUTO_DENSE_LIMIT
             ):
-                return _lattice_auto(
+                return lattice_auto(
                     system,
                     order,
                     budget,
@@ -319,7 +301,7 @@ def _floquet(
         # the dense grid could not decide (a truncation that has not converged near the
         # axis): the lattice raises its order where the exponents need it
         try:
-            lat = _lattice_auto(system, None, budget, refine=True, rtol=rtol)
+            lat = lattice_auto(system, None, budget, refine=True, rtol=rtol)
         except MemoryBudgetError:
             return res
         if lat.decided:
@@ -338,7 +320,7 @@ def _floquet(
                 f"the dense Hill matrix would have size {size} (2 x n x |H|) > {MAX_DENSE_HILL}; "
                 "reduce `harmonics` or the model size, or use method='sparse'"
             )
-        _check_budget(size * size * 16 * 7, budget, "the dense Hill problem", "fewer harmonics")
+        check_budget(size * size * 16 * 7, budget, "the dense Hill problem", "fewer harmonics")
         with np.errstate(under="ignore"):  # far harmonics of eigenvectors underflow harmlessly
             return floquet_dense(system, hset)
     if isinstance(k, bool) or int(k) < 1:
@@ -373,16 +355,6 @@ def _require_grid(hset: HarmonicSet) -> None:
         )
 
 
-def _check_budget(estimate: int, budget: Any, what: str, advice: str) -> None:
-    limit = resolve_budget(budget)
-    if estimate > limit:
-        raise MemoryBudgetError(
-            f"{what} needs an estimated {format_bytes(estimate)}, more than the memory budget "
-            f"of {format_bytes(limit)}; {advice}, or raise the budget (RHEOLIN_MEMORY_BUDGET "
-            "or `memory_budget`)"
-        )
-
-
 def floquet_memory(system: PeriodicSystem, order: int | None = None) -> tuple[str, int]:
     """The method ``floquet(system)`` would use and its estimated memory [bytes].
 
@@ -401,200 +373,3 @@ def floquet_memory(system: PeriodicSystem, order: int | None = None) -> tuple[st
     if large.uses_band(system, None):
         return "band", large.band_estimate(system, p)
     return "lattice", lattice_memory(system, system_lattice(system, p, max_size=10**6))
-
-
-def _lattice_auto(
-    system: PeriodicSystem,
-    order: int | None,
-    budget: Any,
-    *,
-    refine: bool,
-    near: Any = None,
-    continuation: Continuation | None = None,
-    band: int | None = None,
-    rtol: float | None = None,
-) -> FloquetResult:
-    """Lattice method at ``order`` (default: the coarsest, raised one order at a time up to
-    :data:`MAX_AUTO_ORDER` while undecided and the larger lattice fits the budget; where it
-    does not, the undecided coarse verdict says so). The lattices see resonances
-    (:func:`~rheolin.floquet.resonance.floquet_lattice`). A large model (or ``band``) starts
-    from the band of time-averaged modes, built once for every order."""
-    limit = resolve_budget(budget)
-    p = DEFAULT_LATTICE_ORDER if order is None else int(order)
-    top = max(MAX_AUTO_ORDER, DEFAULT_LATTICE_ORDER)
-    modes = large.certified_band(system, band, budget, p) if large.uses_band(system, band) else None
-    lat = floquet_lattice(system, p, max_size=10**6)
-    res = _floquet_lattice(
-        system, lat, budget=budget, near=near, continuation=continuation, modes=modes,
-        rtol=rtol, last=not refine or p >= top,
-    )  # fmt: skip
-    tried: list[int] = []
-    seconds = float(res.info["seconds"])
-    while refine and not res.decided and p < top:
-        if res.stable and large.band_failed(modes):
-            break  # a finer lattice cannot bound the modes the band leaves out
-        finer = floquet_lattice(system, p + 1, max_size=10**6)
-        if lattice_memory(system, finer) > limit:
-            more = f"undecided at lattice order {p}; order {p + 1} would exceed the memory budget"
-            res.info["note"] = more
-            break
-        log.info("floquet: order %d undecided; refining to order %d", p, p + 1)
-        tried.append(p)
-        p += 1
-        res = _floquet_lattice(
-            system, finer, budget=budget, continuation=continuation, modes=modes, rtol=rtol,
-            last=p >= top,
-        )  # fmt: skip
-        seconds += float(res.info["seconds"])
-        res.info["refined_from"] = list(tried)
-        res.info["seconds"] = seconds
-    return res
-
-
-def _floquet_lattice(
-    system: PeriodicSystem,
-    lattice: Lattice,
-    *,
-    budget: Any,
-    near: Any = None,
-    continuation: Continuation | None = None,
-    modes: Any = None,
-    rtol: float | None = None,
-    last: bool = True,
-) -> FloquetResult:
-    """The lattice verdict on ``lattice`` (its unresolved exponents confirmed on finer ones);
-    with ``rtol``, the leading exponent refined when the verdict is decided or ``last`` (no
-    finer order follows)."""
-    t0 = time.perf_counter()
-    est = lattice_memory(system, lattice)
-    if isinstance(modes, BandAveraged):
-        est += band_memory(system, int(modes.lam.size))
-    _check_budget(
-        est,
-        budget,
-        f"the lattice Hill problem (order {lattice.order}, {len(lattice)} harmonics, "
-        f"size {2 * system.n * len(lattice)})",
-        "lower the lattice order",
-    )
-    with np.errstate(under="ignore"), _single_thread_blas():
-        start = continuation.start(system.n, lattice) if continuation is not None else None
-        # the truncation estimates are made last, for the exponents the confirmations keep
-        # (those they replace by finer ones need none)
-        out = lattice_exponents(
-            system,
-            lattice,
-            near=near,
-            start=start,
-            same_system=False,
-            defer_truncation=True,
-            modes=modes,
-        )
-        if continuation is not None and near is None:
-            continuation.keep(system.n, lattice, out)
-        # unresolved exponents and clusters short of theirs: search those clusters again on
-        # finer lattices (p + 1, p + 2), only near them, as long as the memory budget allows
-        finer: Lattice | None = lattice
-        steps: list[Any] = []
-        used = est  # the largest lattice's estimate: what the verdict needed
-        while near is None and np.any(open_rows(out, system.omega)) and len(steps) < 2:
-            finer = next_lattice(finer) if finer is not None else None
-            if finer is None:
-                break
-            est_finer = lattice_memory(system, finer)
-            if est_finer > resolve_budget(budget):
-                break
-            used = max(used, est_finer)
-            previous = (
-                continuation.start(system.n, finer)
-                if continuation is not None and near is None
-                else None
-            )
-            out, fine = confirm_unresolved(system, out, finer, previous)
-            if continuation is not None and fine is not None:
-                continuation.keep(system.n, finer, fine)
-            step = out.info.pop("confirmed")
-            steps.append(step)
-            if not step["clusters"]:
-                break  # nothing left that a finer lattice could settle
-        if steps:
-            out.info["confirmed"] = steps
-        if out.settle is not None:
-            out.settle(out, np.flatnonzero(np.isnan(out.truncation)))
-            out.settle = None  # it holds the lattice's operators
-        res = _lattice_result(system, out, lattice, near, used, t0, modes)
-        if near is None and not res.decided and res.truncation_open().any():
-            # exponents whose truncation estimate alone keeps the verdict open: their
-            # clusters on finer lattices, near them only, before the whole lattice is (no
-            # finer than the top order's confirmations reach)
-            out, opened, need = refine_open(
-                system, out, lattice,
-                lambda o: _lattice_result(system, o, lattice, near, used, t0, modes),
-                budget, continuation, max(MAX_AUTO_ORDER, lattice.order) + 2,
-            )  # fmt: skip
-            used = max(used, need)
-            res = _lattice_result(system, out, lattice, near, used, t0, modes)
-            res.info["refined_near"] = opened
-        if rtol is not None and near is None and (last or res.decided):
-            out, accuracy = refine_leading(system, out, lattice, rtol, budget, continuation)
-            res = _lattice_result(system, out, lattice, near, used, t0, modes)
-            res.info["accuracy"] = accuracy
-    return res
-
-
-def _lattice_result(
-    system: PeriodicSystem,
-    out: Any,
-    lattice: Lattice,
-    near: Any,
-    used: int,
-    t0: float,
-    modes: Any = None,
-) -> FloquetResult:
-    """The :class:`FloquetResult` of a lattice search ``out`` (a band's bodies written in
-    their own frames reported at their inertial frequencies)."""
-    exponents = large.inertial_exponents(system, modes, out.exponents, out.dominant)
-    res = floquet_result(exponents, out.bounds, out.edge, system.omega, "lattice", info=out.info)
-    order = np.argsort(-out.exponents.real, kind="stable")
-    res.truncation = out.truncation[order]
-    res.info["order"] = out.order[order]
-    res.info["uncertainty"] = out.uncertainty[order]
-    res.dominant = out.dominant[order]
-    res.partner = [out.partner[i] for i in order]
-    res.complete = out.complete and near is None
-    res.lattice = lattice
-    res.averaged = out.averaged
-    res.averaged_tol = out.averaged_tol
-    res.info["memory_estimate"] = used
-    res.info["seconds"] = time.perf_counter() - t0
-    res.info["centroid"] = out.centroid[order]
-    res.info["split_gap"] = out.split_gap[order]
-    res.info["unresolved"] = out.unresolved[order]
-    res.info["certified"] = out.certified[order]
-    for key in ("certified_modes", "certified_radii"):
-        res.info[key] = out.info.get(key)
-    if "confirmed" in out.info:
-        res.info["confirmed"] = out.info["confirmed"]
-    res.info["liouville"] = out.liouville
-    if isinstance(modes, BandAveraged):
-        res.info["band"] = large.band_info(modes, [])
-    if order.size:
-        res.max_real_uncertainty = leading_uncertainty(out, int(order[0]))
-    return res
-
-
-class _single_thread_blas:
-    """Limit BLAS to one thread: the lattice kernels are many small products, where
-    threads cost more than they bring (bench/stability.py, design notes)."""
-
-    def __enter__(self) -> None:
-        try:
-            from threadpoolctl import threadpool_limits
-        except ImportError:  # pragma: no cover - threadpoolctl is a dependency
-            self._ctx = None
-            return
-        self._ctx = threadpool_limits(limits=1, user_api="blas")
-        self._ctx.__enter__()
-
-    def __exit__(self, *exc: Any) -> None:
-        if self._ctx is not None:
-            self._ctx.__exit__(*exc)
