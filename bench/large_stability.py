@@ -104,7 +104,7 @@ def runup(text: str, speeds: np.ndarray, order: int, max_order: float) -> str:
     model = parse_model(text).model
     template = model.speed_template()
     cont = Continuation()
-    solve_cpu, cpu, decided, unstable, peak = [], [], 0, 0, 0.0
+    solve_cpu, cpu, decided, unstable, peaks = [], [], 0, 0, [0.0, 0.0]
     previous = None
     for rpm in speeds:
         point, _, s_cpu, s_peak = timed(
@@ -123,7 +123,7 @@ def runup(text: str, speeds: np.ndarray, order: int, max_order: float) -> str:
         res, _, f_cpu, f_peak = timed(lambda system=system: rl.floquet(system, continuation=cont))
         solve_cpu.append(s_cpu)
         cpu.append(f_cpu)
-        peak = max(peak, s_peak, f_peak)
+        peaks = [max(peaks[0], s_peak), max(peaks[1], f_peak)]
         decided += int(res.decided)
         unstable += int(not res.stable)
         print(
@@ -138,7 +138,8 @@ def runup(text: str, speeds: np.ndarray, order: int, max_order: float) -> str:
         f"verdicts with a continuation: {decided} decided, {unstable} unstable; CPU per speed "
         f"median solve {np.median(solve_cpu):.2f} s (first {solve_cpu[0]:.2f} s), median verdict "
         f"{np.median(cpu):.2f} s (first {cpu[0]:.2f} s), total {sum(solve_cpu) + sum(cpu):.0f} s; "
-        f"peak memory {peak:.0f} MB. A 200-speed map at these medians: "
+        f"peak memory above the process: solves {peaks[0]:.0f} MB, verdicts {peaks[1]:.0f} MB. "
+        "A 200-speed map at these medians: "
         f"{200 * per_speed:.0f} CPU s, {200 * per_speed / 2 / 60:.1f} min on 2 cores.\n"
     )
 
