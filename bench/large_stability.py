@@ -5,12 +5,16 @@ Rows, each a model at one speed: the assembly, the solve (``solve_point``, stabi
 the file's harmonics or ``--order``/``--max-order``) and the verdict (``rl.floquet`` of the
 assembled system, default options), wall and CPU seconds, the verdict's stages (the band's
 Arnoldi runs, the small-gain scans, the lattice search: the rest), the CPU ratio verdict /
-solve, the verdict, the band (modes, ``kappa_C``), and the peak resident memory above the
-process of the solve and of the verdict (blank stages: the dense method, below the band).
+solve, the verdict, the band (modes, ``kappa_C``), the peak resident memory above the
+process of the solve and of the verdict (blank stages: the dense method, below the band), and
+how the solve went (method, gmres strategy, iterations, harmonics). A verdict that raises
+(a model error, a memory refusal) is recorded in its row; the solve's figures stand.
 
 * the example rotor on ``--rotor`` shaft nodes (``6 N`` DOF) at 3000 and 4220 rpm;
 * the gearbox with every shaft element split (``--gearbox`` DOFs, rheolin.data.fine);
-* ``--runup N``: the gearbox over N speeds with a :class:`~rheolin.floquet.Continuation`.
+* ``--runup N``: the gearbox (``--runup-dof`` DOFs) over N speeds from 1000 to 5000 rpm, a
+  solve and a verdict at each (a :class:`~rheolin.floquet.Continuation`), and the 200-speed
+  map projected from them.
 
 Usage::
 
@@ -22,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import gc
+import os
 import sys
 import time
 from pathlib import Path
@@ -32,7 +37,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 import rheolin as rl
 from _memory import reset_peak, status_kb
+from rheolin.budget import MemoryBudgetError
 from rheolin.data.fine import refined_example
+from rheolin.errors import ModelError
 from rheolin.floquet import Continuation
 from rheolin.io import parse_model
 from rheolin.results.compute import solve_point
@@ -62,43 +69,78 @@ def row(name: str, text: str, rpm: float, order: int | None, max_order: float | 
         lambda: solve_point(model, rpm * RPM, order=o, max_order=mo, stability=False)
     )
     system = point.assembled.system
-    res, f_wall, f_cpu, peak = timed(lambda: rl.floquet(system))
+    sol = point.solution
+    how = (
+        f"{sol.method} {sol.info.get('strategy', '')}, {sol.iterations} its, "
+        f"{sol.harmonics.size} harmonics" + ("" if sol.success else ", failed")
+    )
+    solved = f"| {name} | {system.n:,} | {rpm:g} | {a_cpu:.2f} | {s_wall:.2f} / {s_cpu:.2f} | "
+    try:
+        res, f_wall, f_cpu, peak = timed(lambda: rl.floquet(system))
+    except (ModelError, MemoryBudgetError) as exc:  # recorded: the solve's figures stand
+        failed = f"{type(exc).__name__}: {str(exc)[:160]}"
+        line = solved + f"- | - | - | - | - | {failed} | - | - | - | {s_peak:.0f} | - | {how} |"
+        print(line, flush=True)
+        return line
     band = res.info.get("band") or {}
     stages = band.get("cpu") or {}
     arnoldi, scan = stages.get("arnoldi", float("nan")), stages.get("scan", float("nan"))
     search = f_cpu - (arnoldi + scan if stages else 0.0)
     verdict = ("stable" if res.stable else "unstable") + ("" if res.decided else ", undecided")
-    line = (
-        f"| {name} | {system.n:,} | {rpm:g} | {a_cpu:.2f} | {s_wall:.2f} / {s_cpu:.2f} | "
+    line = solved + (
         f"{f_wall:.2f} / {f_cpu:.2f} | {arnoldi:.2f} | {scan:.2f} | {search:.2f} | "
         f"{f_cpu / max(s_cpu, 1e-9):.2f} | {verdict} | {res.max_real:.6g} | "
         f"{band.get('modes', '-')} | {band.get('kappa', float('nan')):.3g} | "
-        f"{s_peak:.0f} | {peak:.0f} |"
+        f"{s_peak:.0f} | {peak:.0f} | {how} |"
     )
     print(line, flush=True)
     return line
 
 
-def runup(text: str, speeds: np.ndarray) -> str:
-    """Verdicts over a run-up with a continuation: per-speed CPU seconds and the verdicts."""
+def runup(text: str, speeds: np.ndarray, order: int, max_order: float) -> str:
+    """A run-up as a stability map computes it: at every speed the steady-state solve (warm
+    started from the previous speed's solution) and the verdict with a continuation; per-speed
+    CPU seconds, the verdicts, and the 200-speed map projected from the medians."""
     model = parse_model(text).model
     template = model.speed_template()
     cont = Continuation()
-    cpu, decided, unstable = [], 0, 0
+    solve_cpu, cpu, decided, unstable, peaks = [], [], 0, 0, [0.0, 0.0]
+    previous = None
     for rpm in speeds:
-        system = template.assemble(rpm * RPM).system
-        c = time.process_time()
-        res = rl.floquet(system, continuation=cont)
-        cpu.append(time.process_time() - c)
+        point, _, s_cpu, s_peak = timed(
+            lambda rpm=rpm, previous=previous: solve_point(
+                model,
+                rpm * RPM,
+                order=order,
+                max_order=max_order,
+                stability=False,
+                template=template,
+                x0=previous,
+            )
+        )
+        previous = point.solution
+        system = point.assembled.system
+        res, _, f_cpu, f_peak = timed(lambda system=system: rl.floquet(system, continuation=cont))
+        solve_cpu.append(s_cpu)
+        cpu.append(f_cpu)
+        peaks = [max(peaks[0], s_peak), max(peaks[1], f_peak)]
         decided += int(res.decided)
         unstable += int(not res.stable)
         print(
-            f"  {rpm:.1f} rpm: {res.max_real:.5g} decided {res.decided} {cpu[-1]:.2f} s", flush=True
+            f"  {rpm:.1f} rpm: solve {s_cpu:.2f} s ({point.solution.iterations} its), verdict "
+            f"{res.max_real:.5g} decided {res.decided} {f_cpu:.2f} s",
+            flush=True,
         )
+    per_speed = float(np.median(solve_cpu) + np.median(cpu))
     return (
-        f"Run-up over {len(speeds)} speeds ({speeds[0]:g}-{speeds[-1]:g} rpm) with a "
-        f"continuation: {decided} decided, {unstable} unstable; CPU per verdict median "
-        f"{np.median(cpu):.2f} s, first {cpu[0]:.2f} s, total {sum(cpu):.0f} s.\n"
+        f"Run-up of the {system.n:,}-DOF gearbox over {len(speeds)} speeds "
+        f"({speeds[0]:g}-{speeds[-1]:g} rpm), solves warm-started from the previous speed, "
+        f"verdicts with a continuation: {decided} decided, {unstable} unstable; CPU per speed "
+        f"median solve {np.median(solve_cpu):.2f} s (first {solve_cpu[0]:.2f} s), median verdict "
+        f"{np.median(cpu):.2f} s (first {cpu[0]:.2f} s), total {sum(solve_cpu) + sum(cpu):.0f} s; "
+        f"peak memory above the process: solves {peaks[0]:.0f} MB, verdicts {peaks[1]:.0f} MB. "
+        "A 200-speed map at these medians: "
+        f"{200 * per_speed:.0f} CPU s, {200 * per_speed / 2 / 60:.1f} min on 2 cores.\n"
     )
 
 
@@ -110,16 +152,23 @@ def main() -> None:
     ap.add_argument("--order", type=int, default=2, help="gearbox solve: closure order")
     ap.add_argument("--max-order", type=float, default=60.0, help="gearbox solve: cut-off")
     ap.add_argument("--runup", type=int, default=0, help="gearbox run-up speeds (0: none)")
+    ap.add_argument("--runup-dof", type=int, default=None, help="run-up DOFs (first --gearbox)")
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
     head = (
         "| model | DOF | rpm | assembly CPU s | solve s (wall / CPU) | verdict s (wall / CPU) | "
         "band Arnoldi CPU s | scan CPU s | lattice search CPU s | CPU ratio | verdict | "
-        "largest real part 1/s | band modes | kappa_C | solve peak MB | verdict peak MB |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+        "largest real part 1/s | band modes | kappa_C | solve peak MB | verdict peak MB | "
+        "solve |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
     )
     print(head, end="")
-    command = "OPENBLAS_NUM_THREADS=1 python bench/large_stability.py " + " ".join(sys.argv[1:])
+    threads = " ".join(
+        f"{k}={os.environ[k]}"
+        for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+        if k in os.environ
+    )
+    command = f"{threads} python bench/large_stability.py " + " ".join(sys.argv[1:])
     rows: list[str] = []
 
     def write(tail: str = "") -> str:
@@ -147,7 +196,8 @@ def main() -> None:
     tail = ""
     if args.runup and args.gearbox:
         speeds = np.linspace(1000.0, 5000.0, args.runup)
-        tail = runup(refined_example("gearbox", dof=args.gearbox[0]), speeds)
+        dof = args.runup_dof or args.gearbox[0]
+        tail = runup(refined_example("gearbox", dof=dof), speeds, args.order, args.max_order)
     print(write(tail))
     if args.out:
         print(f"wrote {args.out}")

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 from ..budget import MemoryBudgetError, format_bytes
 
-__all__ = ["VECTOR_COPIES", "SolveMemory", "check"]
+__all__ = ["ROWS_SHARE", "VECTOR_COPIES", "SolveMemory", "check"]
 
 #: Complex ``|H+| x n`` arrays alive during a solve (load, iterate, residual, products,
 #: the two-sided result ``|H| x n``, which counts twice).
@@ -29,6 +29,9 @@ VECTOR_COPIES = 8
 #: GMRES restart lengths of the two strategies (:mod:`rheolin.solvers.krylov`).
 FULL_RESTART = 60
 SUPPORT_RESTART = 200
+#: The ``full`` strategy runs its Krylov vectors over the rows of the time variation only
+#: when they are at most this share of the DOFs (the ``rows`` strategy).
+ROWS_SHARE = 0.5
 
 
 @dataclass
@@ -54,7 +57,8 @@ class SolveMemory:
         if self.support <= 64:
             basis = (SUPPORT_RESTART + 1) * 2 * self.harmonics * self.support * 8
             return basis + self.harmonics * self.support**2 * 16
-        return (FULL_RESTART + 1) * 2 * self.harmonics * self.n_dof * 8
+        width = self.support if self.support <= ROWS_SHARE * self.n_dof else self.n_dof
+        return (FULL_RESTART + 1) * 2 * self.harmonics * width * 8
 
     @property
     def factors(self) -> int:

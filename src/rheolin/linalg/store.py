@@ -6,6 +6,13 @@ the first ``capacity`` harmonics are kept once made; when the harmonics outnumbe
 (``capacity = factor budget // bytes per factor``), the others are factorized again each
 time they are needed and released at once (a fixed set, not LRU: sweeps visit the harmonics
 cyclically, which LRU would turn into a miss every time).
+
+The bytes per factor come from the backend's analysis, which for SuperLU and UMFPACK is a
+guess until they have factorized: so, when the guessed factor fits the budget, the factor of
+the lowest harmonic, which is held first anyway, is made before the capacity is set, and its
+measured size (with a margin of :data:`FILL_MARGIN` for the fill of the other harmonics)
+replaces the guess. A held factor that would take the held ones past the budget all the same
+is not held (it is refactorized on demand).
 """
 
 from __future__ import annotations
@@ -19,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from .direct import Analysis, Factor, analyze, resolve_backend
-from .direct.superlu import SuperLUBackend, probe_vector
+from .direct.superlu import SuperLUBackend, backward_error, probe_vector
 from .errors import SingularBlockError
 from .pencil import Pencil
 from .pool import map_chunks
@@ -28,8 +35,12 @@ __all__ = ["FactorStore", "analysis_for"]
 
 log = logging.getLogger(__name__)
 
-#: A factor whose probe residual exceeds this is redone by SuperLU (checked pivoting).
+#: A factor whose probe solve has a larger backward error than this is redone by SuperLU
+#: (checked pivoting).
 PROBE_RTOL = 1e-10
+#: The held factors are counted at this multiple of the measured size of the first one: the
+#: fill differs from one harmonic to another.
+FILL_MARGIN = 1.5
 
 _CACHE: OrderedDict[tuple[Any, ...], Analysis] = OrderedDict()
 _CACHE_LOCK = threading.Lock()
@@ -100,8 +111,17 @@ class FactorStore:
         )
         self._real = analysis_for(pencil, self.backend, False, 1) if 0 in self.ns else None
         per = self._complex.factor_bytes if self._complex is not None else 0
-        self.factor_bytes = per
         self.workers = max(1, int(workers))
+        self._factors: dict[int, Factor] = {}
+        self._lock = threading.Lock()
+        self.refactorizations = 0
+        order = np.argsort(np.abs(self.ns), kind="stable")
+        ranked = [int(i) for i in order if self.ns[i] != 0]
+        if budget is not None and ranked and per <= budget:
+            first = self._make(ranked[0])  # measured rather than guessed (see the module)
+            self._factors[ranked[0]] = first
+            per = min(per, int(FILL_MARGIN * first.nbytes))
+        self.factor_bytes = per
         if budget is not None and 0 in self.ns:
             budget -= per  # the real factor of n = 0 is always held
         if budget is None or per * complex_count <= budget:
@@ -109,12 +129,13 @@ class FactorStore:
         else:  # keep room for the factors made on demand, one per worker
             capacity = int(max(0, budget // max(per, 1) - self.workers))
         self.capacity = capacity
-        order = np.argsort(np.abs(self.ns), kind="stable")
-        held = [i for i in order if self.ns[i] != 0][:capacity]
+        held = ranked[:capacity]
         self._held = set(held) | {i for i in range(self.ns.size) if self.ns[i] == 0}
-        self._factors: dict[int, Factor] = {}
-        self._lock = threading.Lock()
-        self.refactorizations = 0
+        for i in set(self._factors) - self._held:  # measured, but not to be held
+            self._factors.pop(i).release()
+        # what the held factors of n != 0 may take, and take now
+        self._room = None if budget is None else budget - self.workers * per * self.on_demand
+        self._taken = sum(f.nbytes for f in self._factors.values())
         if self.on_demand:
             log.info(
                 "holding %d of %d factors (%.3g MB each); the rest are refactorized on demand",
@@ -153,8 +174,7 @@ class FactorStore:
             return f
         b = np.array(probe_vector(self.pencil.n))
         x = f.solve(b)
-        A = self.pencil.matrix(n)
-        if not np.linalg.norm(A @ x - b) <= PROBE_RTOL * np.linalg.norm(b):
+        if not backward_error(self.pencil.matrix(n), x, b) <= PROBE_RTOL:
             log.debug("A0(%d): %s factor inaccurate; SuperLU instead", n, self.backend)
             f.release()
             fallback = SuperLUBackend(self.pencil.indptr, self.pencil.indices, n != 0)
@@ -172,16 +192,38 @@ class FactorStore:
             if f is None:
                 f = self._make(i)
                 with self._lock:
-                    self._factors.setdefault(i, f)
-                    f = self._factors[i]
+                    if i in self._factors:  # another thread made it meanwhile
+                        f.release()
+                        f = self._factors[i]
+                    elif self._fits(i, f):
+                        self._factors[i] = f
+                    else:  # past the budget after all: refactorized from now on
+                        self._held.discard(i)
+                        self.capacity -= 1
+                if i not in self._held:
+                    self._on_demand(f, fn)
+                    return
             fn(f)
             return
-        f = self._make(i)
+        self._on_demand(self._make(i), fn)
+
+    def _on_demand(self, f: Factor, fn: Callable[[Factor], None]) -> None:
+        """``fn(f)``, then release the factor ``f`` (made for this use only)."""
         self.refactorizations += 1
         try:
             fn(f)
         finally:
             f.release()
+
+    def _fits(self, i: int, f: Factor) -> bool:
+        """Whether holding ``f`` (of harmonic ``ns[i]``) keeps the held factors within the
+        budget (the caller holds the lock)."""
+        if self._room is None or self.ns[i] == 0:
+            return True
+        if self._taken + f.nbytes > self._room:
+            return False
+        self._taken += f.nbytes
+        return True
 
     def each(self, idx: Sequence[int] | np.ndarray, fn: Callable[[int, Factor], None]) -> None:
         """``fn(i, factor_i)`` for every ``i`` in ``idx`` (threads when the backend allows)."""

@@ -17,6 +17,11 @@ touches) and by what the system knows of its rotors:
   first few products are solve sweeps instead (a warm start converges before ``G`` pays).
 * ``full`` (time variation over many DOFs): GMRES on the whole half vector; each iteration
   is one solve sweep and one convolution.
+* ``rows`` (time variation over many DOFs, but on at most :data:`ROWS_SHARE` of them: a
+  finely meshed shaft with a flat among plain ones): as ``support``, GMRES on ``z`` over the
+  rows ``R`` only, with ``A0^-1`` applied by a solve sweep in every iteration (``G`` would
+  take ``|R|`` sweeps) and ``dA`` block by block. The same residual as ``full``, with Krylov
+  vectors over ``|R|`` DOFs instead of all of them: less memory and orthogonalization.
 * ``band`` (strong time variation over many DOFs: a non-axisymmetric shaft of 10-20 %
   asymmetry, where ``A0^-1`` alone leaves GMRES stalling): the preconditioner holds the wide
   coupling exactly, ``P = A0 + dA_wide`` (the coefficient harmonics whose blocks touch more
@@ -48,6 +53,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..harmonics.balance import HarmonicBalance
+from ..linalg.memory import ROWS_SHARE
+from .gmres_core import Step, gmres_from
 from .registry import Options, SolverOutcome, register
 
 #: Use the ``support`` strategy when ``dA`` touches at most this many DOFs.
@@ -58,90 +65,8 @@ MAX_SUPPORT = 64
 PROBE_ITERATIONS = 20
 
 
-def _real_gmres(
-    apply: Callable[[np.ndarray], np.ndarray],
-    rhs: np.ndarray,
-    weights: np.ndarray,
-    opts: Options,
-    scale: float,
-    restart: int,
-) -> tuple[np.ndarray, int, list[float]]:
-    """GMRES over R on half-spectrum complex arrays (rows = harmonics ``n >= 0``), from zero
-    (:func:`_gmres_from` starts from a guess).
-
-    ``scale`` converts the residual to the reported one: ``||r|| / scale``.
-    """
-    shape = rhs.shape
-    w = np.sqrt(weights)[:, None]
-    size = 2 * rhs.size
-
-    def to_real(Y: np.ndarray) -> np.ndarray:
-        return np.ascontiguousarray(Y * w).view(np.float64).ravel()
-
-    def to_half(y: np.ndarray) -> np.ndarray:
-        return np.ascontiguousarray(y).view(np.complex128).reshape(shape) / w
-
-    B = spla.LinearOperator(
-        (size, size), matvec=lambda y: to_real(apply(to_half(y))), dtype=np.float64
-    )
-    b = to_real(rhs)
-    bnorm = float(np.linalg.norm(b))
-    history: list[float] = []
-    if bnorm == 0.0:
-        return np.zeros(shape, dtype=complex), 0, history
-
-    def record(rel: float) -> None:
-        history.append(float(rel) * bnorm / scale)
-        if opts.callback:
-            opts.callback(len(history), history[-1])
-
-    maxiter = 500 if opts.maxiter is None else int(opts.maxiter)
-    restart = max(1, min(restart, maxiter, size))
-    y, info = spla.gmres(
-        B,
-        b,
-        x0=np.zeros(size),
-        rtol=min(opts.rtol * scale / bnorm, 0.5),
-        atol=0.0,
-        restart=restart,
-        maxiter=max(1, -(-maxiter // restart)),
-        callback=record,
-        callback_type="pr_norm",
-    )
-    return to_half(y), int(info), history
-
-
 #: Refinement steps against the recomputed residual when ``A0^-1`` is approximate (modal).
 MAX_REFINEMENTS = 3
-
-Step = Callable[[np.ndarray, "np.ndarray | None"], tuple[np.ndarray, int, list[float]]]
-
-
-def _gmres_from(
-    apply: Callable[[np.ndarray], np.ndarray],
-    rhs: np.ndarray,
-    x0: np.ndarray | None,
-    norm: Callable[[np.ndarray], float],
-    weights: np.ndarray,
-    opts: Options,
-    scale: float,
-    restart: int,
-) -> tuple[np.ndarray, int, list[float]]:
-    """GMRES from ``x0`` when its residual is below that of zero (``||rhs||``), else from
-    zero: a guess from a distant speed must not make GMRES start worse than from scratch.
-    From ``x0`` it solves for the correction, ``A dx = rhs - A x0`` from zero, which is the
-    same iteration without SciPy's second product for the same initial residual (one
-    product fewer per solve)."""
-    if x0 is not None:
-        r0 = rhs - apply(x0)
-        start = norm(r0)
-        if start < opts.rtol * scale:  # converged already (SciPy's own first test)
-            return x0, 0, []
-        if start < norm(rhs):
-            dx, info, history = _real_gmres(apply, r0, weights, opts, scale, restart)
-            return x0 + dx, info, history
-    return _real_gmres(apply, rhs, weights, opts, scale, restart)
-
 
 #: GMRES on the support applies ``A0^-1`` by one sweep of solves (one right-hand side per
 #: harmonic) up to this many times before it makes ``G`` (``|R|`` right-hand sides per
@@ -188,7 +113,7 @@ def _support_step(op: HarmonicBalance, opts: Options) -> Step:
         q0 = op.solve_A0(F)
         rhs = -op.apply_dA_support(q0[:, cols], rows, cols)
         Z0 = None if x0 is None else -op.apply_dA_support(x0[:, cols], rows, cols)
-        Z, info, history = _gmres_from(reduced, rhs, Z0, op.norm, weights, opts, op.rhs_norm, 200)
+        Z, info, history = gmres_from(reduced, rhs, Z0, op.norm, weights, opts, op.rhs_norm, 200)
         Y = F.copy()
         Y[:, rows] += Z
         return op.solve_A0(Y), info, history
@@ -196,8 +121,41 @@ def _support_step(op: HarmonicBalance, opts: Options) -> Step:
     return step
 
 
+def _rows_step(op: HarmonicBalance, opts: Options) -> Step:
+    """GMRES on the rows of ``dA``, ``A0^-1`` by a solve sweep per iteration (the module)."""
+    rows = op.support[0]
+    weights = np.where(op.pos == 0, 1.0, 2.0)
+
+    def dA_rows(Q: np.ndarray) -> np.ndarray:
+        return op.apply_dA(Q)[:, rows]
+
+    def reduced(Z: np.ndarray) -> np.ndarray:
+        Y = np.zeros((Z.shape[0], op.n_dof), dtype=complex)
+        Y[:, rows] = Z
+        return Z + dA_rows(op.solve_A0(Y))
+
+    def step(F: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, list[float]]:
+        rhs = -dA_rows(op.solve_A0(F))
+        Z0 = None if x0 is None else -dA_rows(x0)
+        Z, info, history = gmres_from(reduced, rhs, Z0, op.norm, weights, opts, op.rhs_norm, 60)
+        Y = F.copy()
+        Y[:, rows] += Z
+        return op.solve_A0(Y), info, history
+
+    return step
+
+
+def uses_rows(op: HarmonicBalance) -> bool:
+    """Whether the ``full`` strategy runs on the rows of ``dA`` only (``rows``, the module)."""
+    rows, cols = op.support
+    return MAX_SUPPORT < max(rows.size, cols.size) and rows.size <= ROWS_SHARE * op.n_dof
+
+
 def _full_step(op: HarmonicBalance, opts: Options) -> Step:
-    """GMRES on the whole half vector, right-preconditioned by ``A0^-1``."""
+    """GMRES on the whole half vector, right-preconditioned by ``A0^-1`` (on the rows of
+    ``dA`` only when :func:`uses_rows`)."""
+    if uses_rows(op):
+        return _rows_step(op, opts)
     weights = np.where(op.pos == 0, 1.0, 2.0)
 
     def preconditioned(Y: np.ndarray) -> np.ndarray:
@@ -205,7 +163,7 @@ def _full_step(op: HarmonicBalance, opts: Options) -> Step:
 
     def step(F: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, list[float]]:
         Y0 = None if x0 is None else op.apply_A0(x0)
-        Y, info, history = _gmres_from(
+        Y, info, history = gmres_from(
             preconditioned, F, Y0, op.norm, weights, opts, op.rhs_norm, 60
         )
         return op.solve_A0(Y), info, history
@@ -247,7 +205,7 @@ def _band_step(op: HarmonicBalance, opts: Options) -> tuple[Step | None, str]:
 
     def step(F: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, list[float]]:
         Y0 = None if x0 is None else op.half((P @ op.expand(x0).ravel()).reshape(nh, nd))
-        Y, info, history = _gmres_from(
+        Y, info, history = gmres_from(
             preconditioned, F, Y0, op.norm, weights, opts, op.rhs_norm, 60
         )
         return inverse(Y), info, history
@@ -388,7 +346,7 @@ def _pairs_step(op: HarmonicBalance, opts: Options) -> tuple[Step | None, str]:
 
     def step(F: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, list[float]]:
         Y0 = None if x0 is None else op.apply(x0)
-        Y, info, history = _gmres_from(
+        Y, info, history = gmres_from(
             preconditioned, F, Y0, op.norm, weights, opts, op.rhs_norm, 60
         )
         return inverse(Y), info, history
@@ -472,6 +430,8 @@ def solve_gmres(op: HarmonicBalance, opts: Options) -> SolverOutcome:
         Q, refinements = Q + dQ, refinements + 1
         history += more
     its = len(history)
+    if strategy == "full" and uses_rows(op):
+        strategy = "rows"
     extra = {
         "strategy": strategy,
         "support": support,

@@ -1,0 +1,137 @@
+"""The steady-state solve of long banded chains (finely meshed shafts): the ``rows`` gmres
+strategy, factors held within the memory budget by their measured size, and the checks of a
+SuperLU factor (backward error, singular blocks)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+import rheolin as rl
+from rheolin.linalg.direct import superlu
+from rheolin.linalg.direct.superlu import SuperLUBackend, splu_checked
+from rheolin.linalg.errors import SingularBlockError
+from rheolin.linalg.pencil import Pencil
+from rheolin.linalg.store import FactorStore
+
+
+def _rel(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.linalg.norm(a - b) / np.linalg.norm(b))
+
+
+def _stiffness(n: int) -> sp.csr_array:
+    main = 2e6 + 1e5 * np.linspace(0.0, 1.0, n)
+    off = -1e6 * np.ones(n - 1)
+    return sp.csr_array(sp.diags_array([off, main, off], offsets=[-1, 0, 1]))
+
+
+def test_rows_strategy_matches_the_assembled_coupled_system(monkeypatch) -> None:
+    """Time-varying stiffness on 100 of 300 DOFs (past the ``support`` strategy's 64, within
+    half of the DOFs): GMRES over those rows against the sparse LU of the coupled matrix."""
+    from rheolin.solvers import krylov
+
+    monkeypatch.setattr(krylov, "PROBE_ITERATIONS", 10**6)  # not switched to ``band``
+    n = 300
+    main = 2.0 + np.linspace(0.0, 1.0, n)
+    K0 = sp.csr_array(sp.diags_array([-np.ones(n - 1), main, -np.ones(n - 1)], offsets=[-1, 0, 1]))
+    local = np.zeros(n, dtype=complex)
+    local[100:200] = 0.1 * main[100:200]
+    K1 = sp.csr_array(sp.diags_array(local))
+    M0, D0 = sp.csr_array(sp.eye_array(n)), sp.csr_array(0.03 * sp.eye_array(n))
+    f = np.zeros(n, dtype=complex)
+    f[5::10] = np.exp(0.3j * np.arange(30))  # loads all along: no response decays to underflow
+    system = rl.PeriodicSystem(0.9, M={0: M0}, D={0: D0}, K={0: K0, 1: K1, -1: K1}, f={1: f})
+    H = rl.HarmonicSet.full(4)
+    ref = rl.solve(system, H, method="direct", stability=False)
+    sol = rl.solve(system, H, method="gmres", backend="lu", stability=False, rtol=1e-12)
+    assert ref.success and sol.success, sol.message
+    assert sol.info["strategy"] == "rows"
+    assert _rel(sol.q, ref.q) < 1e-10
+
+
+def _pencil(n: int = 400) -> Pencil:
+    K0 = _stiffness(n)
+    return Pencil(K0, K0 * 1e-5, sp.csr_array(sp.eye_array(n)), 300.0)
+
+
+def _check_solves(store: FactorStore, pencil: Pencil, ns: np.ndarray) -> None:
+    """Every factor the store gives solves its block (against dense LAPACK)."""
+    b = np.random.default_rng(0).standard_normal(pencil.n)
+    out: list[np.ndarray] = []
+    for i in range(ns.size):
+        store.use(i, lambda f: out.append(f.solve(b)))
+        ref = np.linalg.solve(pencil.matrix(int(ns[i])).toarray(), b)
+        assert _rel(out[-1], ref) < 1e-12
+
+
+def test_factors_are_held_by_their_measured_size_within_the_budget() -> None:
+    """SuperLU's size guess before factorizing would not let every factor of a chain be held
+    in this budget; their measured size does, and every one is held (no refactorization)."""
+    pencil, ns = _pencil(), np.arange(12)
+    free = FactorStore(pencil, ns, "superlu")
+    free.each(range(ns.size), lambda i, f: None)
+    measured = free.held_bytes()
+    budget = 3 * measured
+    guess = SuperLUBackend(pencil.indptr, pencil.indices, True).factor_bytes
+    assert guess * (ns.size - 1) > budget  # the case: the guess alone says "on demand"
+    store = FactorStore(pencil, ns, "superlu", budget=budget)
+    assert not store.on_demand
+    _check_solves(store, pencil, ns)
+    assert store.refactorizations == 0 and store.held_bytes() <= budget
+
+
+def test_held_factors_stay_within_a_tight_budget() -> None:
+    """Room for about half of the factors: the held ones stay within the budget and the
+    others are refactorized on demand, every one solving its block."""
+    pencil, ns = _pencil(), np.arange(12)
+    free = FactorStore(pencil, ns, "superlu")
+    free.each(range(ns.size), lambda i, f: None)
+    budget = free.held_bytes() // 2
+    store = FactorStore(pencil, ns, "superlu", budget=budget)
+    assert store.on_demand
+    _check_solves(store, pencil, ns)
+    assert store.held_bytes() <= budget and store.refactorizations > 0
+
+
+def test_stiff_block_is_factorized_once(monkeypatch) -> None:
+    """A stiff tie (1e13 N/m in a chain of 1e6 N/m springs) leaves a relative residual far
+    above round-off however exact the factor; its backward error is round-off, so the first
+    (diagonal-preferring) factorization is kept."""
+    n = 200
+    K = _stiffness(n).tolil()
+    K[100, 100] += 1e13
+    K[101, 101] += 1e13
+    K[100, 101] -= 1e13
+    K[101, 100] -= 1e13
+    A = sp.csc_array(K.tocsc() - 1e4 * sp.eye_array(n) + 10j * sp.eye_array(n))
+    calls: list[int] = []
+    real_splu = spla.splu
+
+    def counted(*args, **kwargs):  # type: ignore[no-untyped-def]
+        calls.append(1)
+        return real_splu(*args, **kwargs)
+
+    monkeypatch.setattr(superlu.spla, "splu", counted)
+    lu = splu_checked(A)
+    b = superlu.probe_vector(n)
+    x = lu.solve(b.astype(complex))
+    assert np.linalg.norm(A @ x - b) / np.linalg.norm(b) > 1e-11  # the old check failed it
+    assert _rel(x, np.linalg.solve(A.toarray(), b)) < 1e-6
+    assert len(calls) == 1
+
+
+def test_undamped_resonance_block_is_singular() -> None:
+    """``K - w^2 M`` at an eigenvalue of the chain (complex, as every harmonic ``n != 0``):
+    singular to round-off; with a little damping it factorizes."""
+    n = 200
+    K = _stiffness(n)
+    lam = np.linalg.eigvalsh(K.toarray())[7]
+    A = sp.csc_array(K - lam * sp.eye_array(n), dtype=complex)
+    with pytest.raises(SingularBlockError):
+        splu_checked(A, 3)
+    damped = sp.csc_array(A + 1j * 1e3 * sp.eye_array(n))
+    b = superlu.probe_vector(n)
+    x = splu_checked(damped).solve(b.astype(complex))
+    assert _rel(x, np.linalg.solve(damped.toarray(), b)) < 1e-10
