@@ -266,3 +266,19 @@ def test_a_system_built_by_hand_is_held_as_given() -> None:
     s = _two_inertia()
     assert s.motions is None
     assert rl.solve(s, 3).info["rigid_modes"] == 1
+
+
+def test_a_fine_mesh_whose_lowest_modes_are_all_soft_is_not_taken_for_rigid_bodies() -> None:
+    """A 10 m shaft on 2,001 nodes (12,006 DOF) held laterally at both ends: its lowest
+    bending modes (6.2 rad/s and up, ``(n pi / L)^2 sqrt(EI / rho A)``) lie below 1e-8 of its
+    stiffest mass-scaled element, so every eigenvalue the Lanczos search returns is a
+    candidate; exactly two are free motions, its axial translation and its torsion."""
+    m = rl.Model()
+    m.add_shaft("s", np.linspace(0.0, 10.0, 2001), outer_diameter=0.05, material="steel")
+    for name, node in (("A", 0), ("B", 2000)):
+        m.add_bearing(name, "s", node, stiffness=[1e8, 1e8], damping=[100.0, 100.0],
+                      components=["ux", "uy"])  # fmt: skip
+    system = m.assemble(100.0).system
+    assert system.n == 12006
+    found = find_rigid_modes(system)
+    assert found is not None and found.count == 2
