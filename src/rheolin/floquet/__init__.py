@@ -40,9 +40,10 @@ from .api import (
 from .averaged import MAX_AVERAGED_DENSE
 from .checks import liouville_sum
 from .continuation import Continuation
+from .footprint import lattice_memory
 from .outcome import LatticeExponents
 from .result import SAFETY, SPLIT_FACTOR, TRUNCATION_SAFETY, FloquetResult
-from .search import lattice_exponents, lattice_memory
+from .search import lattice_exponents
 
 __all__ = [
     "AUTO_DENSE_LIMIT",

@@ -19,9 +19,9 @@ from ..budget import memory_budget as resolve_budget
 from ..harmonics.lattice import Lattice, harmonic_lattice
 from ..system.periodic import PeriodicSystem
 from .confirm import confirm_unresolved, snapshot
+from .footprint import lattice_memory
 from .outcome import LatticeExponents
 from .result import SAFETY
-from .search import lattice_memory
 
 __all__ = [
     "DEFAULT_RTOL",

@@ -20,6 +20,7 @@ from .accuracy import (
 )
 from .continuation import Continuation
 from .dense import floquet_dense
+from .footprint import lattice_memory
 from .lattice_run import (
     DEFAULT_LATTICE_ORDER,
     MAX_AUTO_ORDER,
@@ -28,7 +29,6 @@ from .lattice_run import (
     lattice_auto,
 )
 from .result import FloquetResult
-from .search import lattice_memory
 from .sparse import floquet_sparse
 
 __all__ = [

@@ -22,7 +22,7 @@ from ..system.frames import BodyFrame, rotate, transformation
 from ..system.periodic import PeriodicSystem
 from .band import BAND_ABOVE, BAND_MODES, BandAveraged, band_memory, band_modes
 from .complement import touched_dofs
-from .search import lattice_memory
+from .footprint import lattice_memory
 
 __all__ = [
     "DISTRIBUTED",

@@ -19,9 +19,10 @@ from .accuracy import leading_uncertainty, next_lattice, refine_leading, refine_
 from .band import BandAveraged, band_memory
 from .confirm import confirm_unresolved, open_rows
 from .continuation import Continuation
+from .footprint import lattice_memory
 from .resonance import floquet_lattice
 from .result import FloquetResult, floquet_result
-from .search import lattice_exponents, lattice_memory
+from .search import lattice_exponents
 
 __all__ = [
     "DEFAULT_LATTICE_ORDER",
