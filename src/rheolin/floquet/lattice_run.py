@@ -79,7 +79,7 @@ def lattice_auto(
     p = DEFAULT_LATTICE_ORDER if order is None else int(order)
     top = max(MAX_AUTO_ORDER, DEFAULT_LATTICE_ORDER)
     modes = large.certified_band(system, band, budget, p) if large.uses_band(system, band) else None
-    lat = floquet_lattice(system, p, max_size=10**6)
+    lat = floquet_lattice(system, p, max_size=10**6, avg=modes)  # one band for both
     res = floquet_on_lattice(
         system, lat, budget=budget, near=near, continuation=continuation, modes=modes,
         rtol=rtol, last=not refine or p >= top,
@@ -89,7 +89,7 @@ def lattice_auto(
     while refine and not res.decided and p < top:
         if res.stable and large.band_failed(modes):
             break  # a finer lattice cannot bound the modes the band leaves out
-        finer = floquet_lattice(system, p + 1, max_size=10**6)
+        finer = floquet_lattice(system, p + 1, max_size=10**6, avg=modes)
         if lattice_memory(system, finer) > limit:
             more = f"undecided at lattice order {p}; order {p + 1} would exceed the memory budget"
             res.info["note"] = more

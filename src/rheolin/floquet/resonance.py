@@ -129,11 +129,14 @@ def resonant_costs(system: PeriodicSystem, avg: Averaged | None = None) -> dict[
     return out
 
 
-def floquet_lattice(system: PeriodicSystem, order: int, *, max_size: int | None = None) -> Any:
+def floquet_lattice(
+    system: PeriodicSystem, order: int, *, max_size: int | None = None, avg: Any = None
+) -> Any:
     """The lattice of order ``order`` on :func:`resonant_costs` (the coupling costs when the
-    time-averaged modes cannot be computed densely)."""
+    time-averaged modes cannot be computed densely); ``avg``: the time-averaged modes the
+    search starts from (a large model's certified band), else :func:`averaged_modes`."""
     try:
-        costs = resonant_costs(system)
+        costs = resonant_costs(system, avg)
     except ValueError:  # too large for the dense averaged modes
         costs = coupling_costs(system)
     if not costs:
