@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from click.testing import Result
 from typer.testing import CliRunner
 
 from rheolin.cli import app
@@ -50,7 +51,9 @@ def undecided_at(monkeypatch):
     monkeypatch.setattr(solve_module, "floquet", floquet)
 
 
-def test_sweep_reports_undecided_speeds(undecided_at, tmp_path: Path) -> None:
+def _sweep_band(tmp_path: Path) -> tuple[Result, Path]:
+    """``rheolin sweep`` of the band model over 850-1250 rpm (in this process, where the
+    patched verdicts apply): the result and the output directory."""
     model = tmp_path / "band.toml"
     model.write_text(BAND)
     out = tmp_path / "out"
@@ -59,6 +62,11 @@ def test_sweep_reports_undecided_speeds(undecided_at, tmp_path: Path) -> None:
         ["sweep", str(model), "--speeds", "850:1250:50rpm", "--out", str(out), "--workers", "1"],
         catch_exceptions=False,
     )
+    return res, out
+
+
+def test_sweep_reports_undecided_speeds(undecided_at, tmp_path: Path) -> None:
+    res, out = _sweep_band(tmp_path)
     assert res.exit_code == 1, res.output
     table = json.loads((out / "sweep.json").read_text())
     rpm = np.round(np.array(table["speeds_rpm"]), 6)
@@ -96,14 +104,7 @@ def test_a_failed_check_leaves_the_point_solved_and_its_speed_undecided(
 
     monkeypatch.setattr(solve_module, "floquet", failing(solve_module.floquet))
     monkeypatch.setattr(floquet_package, "floquet", failing(floquet_package.floquet))
-    model = tmp_path / "band.toml"
-    model.write_text(BAND)
-    out = tmp_path / "out"
-    res = CliRunner().invoke(
-        app,
-        ["sweep", str(model), "--speeds", "850:1250:50rpm", "--out", str(out), "--workers", "1"],
-        catch_exceptions=False,
-    )
+    res, out = _sweep_band(tmp_path)
     assert res.exit_code == 1, res.output
     table = json.loads((out / "sweep.json").read_text())
     i = int(np.flatnonzero(np.isclose(table["speeds_rpm"], 900.0))[0])
