@@ -189,6 +189,17 @@ def exit_with(code: int) -> NoReturn:
     raise typer.Exit(code)
 
 
+def _interrupting_signal() -> int:
+    """The signal whose Python handler raises the interrupt in the main thread: SIGINT, or
+    SIGTERM when SIGINT is ignored (a batch job or a background ``cmd &`` of a script, where
+    the stop comes as SIGTERM through :func:`sigterm_as_interrupt`)."""
+    if callable(signal.getsignal(signal.SIGINT)):
+        return signal.SIGINT
+    if callable(signal.getsignal(signal.SIGTERM)):
+        return signal.SIGTERM
+    return signal.SIGINT  # neither is Python's: nothing can be redelivered
+
+
 def _redelivering(previous: Any) -> Any:
     """An unraisable-exception hook that gives a Ctrl-C back to the command: one landing in a
     finalizer or weakref callback is printed and dropped by Python (the command would go on
@@ -196,7 +207,7 @@ def _redelivering(previous: Any) -> Any:
 
     def again() -> None:
         if _STATE.get("running"):
-            _thread.interrupt_main()
+            _thread.interrupt_main(_interrupting_signal())
 
     def hook(unraisable: Any) -> None:
         if unraisable.exc_type is not None and issubclass(unraisable.exc_type, KeyboardInterrupt):
