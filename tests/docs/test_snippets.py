@@ -7,9 +7,10 @@ How a block is treated follows its fence:
   interleaved with its commands, in a fresh temporary directory.
 * ```console and ```sh: one command per line (``\\`` continues a line, ``#`` starts a
   comment). ``rheolin ...`` lines run in that directory with this interpreter's rheolin and
-  must exit 0, or N when the comment starts with ``exit code N``. Install lines (``git
-  clone``, ``cd``, ``pip install``, ``make``) are not run; their extras and make targets
-  are checked against pyproject.toml and the Makefile.
+  must exit 0, or N when the comment starts with ``exit code N``: a plain
+  ``rheolin ARGS [> FILE]`` in the document's process (:func:`run_rheolin`), others in bash.
+  Install lines (``git clone``, ``cd``, ``pip install``, ``make``) are not run; their extras
+  and make targets are checked against pyproject.toml and the Makefile.
 * ```toml: parsed; with ``<!-- file: NAME -->`` on the line before the fence, also written to
   NAME in the directory before the next block runs.
 * ```text and ```json: output and excerpts, not run.
@@ -21,6 +22,7 @@ group (killed at the end, with any worker processes).
 from __future__ import annotations
 
 import ast
+import contextlib
 import importlib
 import inspect
 import json
@@ -33,9 +35,12 @@ import subprocess
 import sys
 import textwrap
 import tomllib
+import traceback
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+from unittest import mock
 
 import pytest
 
@@ -50,6 +55,8 @@ FENCE = re.compile(r"^(\s*)```(\S*)\s*$")
 FILE_TAG = re.compile(r"^\s*<!--\s*file:\s*(\S+)\s*-->\s*$")
 EXIT_CODE = re.compile(r"^exit code (\d+)\b")
 INSTALL = ("git clone ", "cd ", "pip install ", "make ")
+#: Characters a shell interprets (besides one ``> FILE``): such a line runs through bash.
+SHELL = frozenset("|&;<()$`\\*?[]{}~!\n")
 
 
 @dataclass
@@ -169,8 +176,86 @@ def steps(path: Path) -> list[dict[str, Any]]:
     return out
 
 
+def plain_command(command: str) -> tuple[list[str], str | None] | None:
+    """``(ARGS, FILE)`` of ``rheolin ARGS [> FILE]`` with nothing else for a shell (pipes,
+    ``&&``, ``$``, globs, ``2>``, backticks, open quotes), else None.
+
+    >>> plain_command("rheolin example rotor > 'my rotor.toml'")
+    (['example', 'rotor'], 'my rotor.toml')
+    >>> [plain_command(c) for c in ("rheolin run m.toml 2> e", "rheolin x | head", "rheolin a>b")]
+    [None, None, None]
+    """
+    if SHELL & set(command):
+        return None
+    head, redirect, target = command.partition(">")
+    if ">" in target or (redirect and not head[-1:].isspace()):  # `>>`, `2>`, `a>b`
+        return None
+    try:
+        words, out = shlex.split(head), shlex.split(target)
+    except ValueError:  # a quote left open (a quoted `>`): bash says what it makes of it
+        return None
+    if words[:1] != ["rheolin"] or len(out) != len(redirect):
+        return None
+    return words[1:], out[0] if out else None
+
+
+def run_rheolin(args: list[str], out: str | None, env: dict[str, str], filters: list) -> int:
+    """``rheolin ARGS [> OUT]`` through the application object in this process; its exit
+    status. It starts as a new process does: environment ``env``, consoles ``COLUMNS`` wide,
+    NumPy's default error handling, the first warning ``filters``, stdout (``OUT`` truncated
+    as bash does) and stderr at their file descriptors; those, the directory, signal handlers
+    and ``sys.unraisablehook`` (an interrupt silences it) are put back after."""
+    import numpy as np
+
+    from rheolin.cli.app import app
+    from rheolin.cli.common import console
+    from rheolin.cli.errors import err
+
+    widths = [(c, c._width) for c in (console, err)]
+    hooks = sys.unraisablehook, sys.excepthook
+    handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    for f in (sys.stdout, sys.stderr):
+        f.flush()
+    fds = os.dup(1), os.dup(2)
+    try:
+        for c, _ in widths:  # a console takes its width from COLUMNS when it is made
+            c._width = int(env["COLUMNS"]) if env.get("COLUMNS", "").isdigit() else None
+        if out is not None:
+            os.dup2(fd := os.open(out, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666), 1)
+            os.close(fd)
+        with (
+            mock.patch.dict(os.environ, env, clear=True),
+            contextlib.chdir(Path.cwd()),
+            warnings.catch_warnings(),
+            np.errstate(divide="warn", over="warn", under="ignore", invalid="warn"),
+        ):
+            warnings.filters = list(filters)  # a command may add to it
+            try:
+                app(args, prog_name="rheolin", standalone_mode=True)
+            except SystemExit as exc:  # as Python's exit status (click gives an int)
+                return exc.code % 256 if isinstance(exc.code, int) else int(exc.code is not None)
+            except Exception:  # what escapes the application ends a process like this
+                traceback.print_exc()
+                return 1
+            return 0
+    finally:
+        for f in (sys.stdout, sys.stderr):
+            f.flush()
+        for fd, target in zip(fds, (1, 2), strict=True):
+            os.dup2(fd, target)
+            os.close(fd)
+        for c, w in widths:
+            c._width = w
+        sys.unraisablehook, sys.excepthook = hooks
+        for s, h in handlers.items():
+            if h is not None:
+                signal.signal(s, h)
+
+
 def driver(plan: list[dict[str, Any]], rheolin: str) -> None:
     """Run the steps of one document in the current directory (the child process)."""
+    filters = list(warnings.filters)
+    sys.stdout.reconfigure(line_buffering=True)  # type: ignore[union-attr]
     namespace: dict[str, Any] = {"__name__": "__main__"}
     env = dict(os.environ, PATH=f"{Path(rheolin).parent}{os.pathsep}{os.environ['PATH']}")
     for step in plan:
@@ -183,12 +268,16 @@ def driver(plan: list[dict[str, Any]], rheolin: str) -> None:
             Path(step["name"]).write_text(step["text"], encoding="utf-8")
         else:
             print(f"$ {step['command']}", flush=True)
-            res = subprocess.run(
-                ["bash", "-o", "pipefail", "-c", step["command"]], env=env, check=False
-            )
-            if res.returncode != step["code"]:
+            plain = plain_command(step["command"])
+            if plain is not None:
+                returncode = run_rheolin(*plain, env, filters)
+            else:
+                returncode = subprocess.run(
+                    ["bash", "-o", "pipefail", "-c", step["command"]], env=env, check=False
+                ).returncode
+            if returncode != step["code"]:
                 raise SystemExit(
-                    f"{step['where']}: `{step['command']}` exited {res.returncode}, "
+                    f"{step['where']}: `{step['command']}` exited {returncode}, "
                     f"the document expects {step['code']}"
                 )
         sys.stdout.flush()
@@ -243,6 +332,21 @@ def test_every_block_runs(path: Path, tmp_path: Path) -> None:
     """The document's blocks run as written (python, commands) or parse (TOML)."""
     code, output = run_document(path, tmp_path)
     assert code == 0, textwrap.shorten(output, 100_000) if code != 0 else ""
+
+
+@pytest.mark.parametrize("comment", ["", "  # exit code 2"])
+def test_an_unexpected_exit_code_fails_the_document(comment: str, tmp_path: Path) -> None:
+    """``rheolin validate missing.toml`` exits 2 (no such file): its document fails, unless
+    the line's comment says ``exit code 2``; its message reaches the output either way."""
+    doc = tmp_path / "doc.md"
+    doc.write_text(f"```console\n$ rheolin validate missing.toml{comment}\n```\n")
+    (tmp_path / "doc").mkdir()
+    code, output = run_document(doc, tmp_path / "doc")
+    assert "missing.toml" in output.partition("$ rheolin validate missing.toml")[2], output
+    if comment:
+        assert code == 0, output
+    else:
+        assert code == 1 and "doc.md:2: `rheolin validate missing.toml` exited 2," in output
 
 
 # ---------------------------------------------------------------- names in the prose
