@@ -189,7 +189,7 @@ def exit_with(code: int) -> NoReturn:
     raise typer.Exit(code)
 
 
-def _interrupting_signal() -> int:
+def _interrupting_signal() -> signal.Signals:
     """The signal whose Python handler raises the interrupt in the main thread: SIGINT, or
     SIGTERM when SIGINT is ignored (a batch job or a background ``cmd &`` of a script, where
     the stop comes as SIGTERM through :func:`sigterm_as_interrupt`)."""
