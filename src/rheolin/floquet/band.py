@@ -32,7 +32,14 @@ import scipy.sparse.linalg as spla
 from ..harmonics.hill import state_scaling
 from ..system.periodic import PeriodicSystem
 from .averaged import MAX_AVERAGED_DENSE, Averaged
-from .complement import KAPPA_LIMIT, Complement, Scan, energy_certificate, touched_dofs
+from .complement import (
+    DENSE_TOUCHED,
+    KAPPA_LIMIT,
+    Complement,
+    Scan,
+    energy_certificate,
+    touched_dofs,
+)
 from .result import EPS
 from .shift_invert import LU_FILL
 
@@ -289,13 +296,17 @@ def _top_frequency(system: PeriodicSystem, band: BandAveraged) -> float:
 def band_memory(system: PeriodicSystem, modes: int = BAND_MODES) -> int:
     """Estimated peak memory [bytes] of :func:`band_modes` with ``modes`` modes: the LU of
     ``K_0`` (at the lattice search's fill), the two Arnoldi bases, the band's vectors and the
-    scan's factor and transfer blocks."""
+    scan's factor and transfer blocks (dense up to
+    :data:`~rheolin.floquet.complement.DENSE_TOUCHED` touched DOFs, else blocks of the band's
+    width: :class:`~rheolin.floquet.complement.Scan`)."""
     n = system.n
     K, D, M = _parts(system)
     nnz = int((abs(K) + abs(D) + abs(M)).nnz)
     ncv = min(2 * n, max(2 * modes + 9, 40))
     touched = touched_dofs(system).size
-    scan = n * min(touched, 400) * 16 + nnz * LU_FILL * 16 + (2 * touched) ** 2 * 16 * 4
+    dense = min(touched, DENSE_TOUCHED)
+    blocks = 4 * n * modes * 16 if touched > DENSE_TOUCHED else 0
+    scan = n * dense * 16 + nnz * LU_FILL * 16 + (2 * dense) ** 2 * 16 * 4 + blocks
     return int(
         nnz * LU_FILL * 16 + 2 * (2 * n) * ncv * 8 + 3 * (2 * n) * modes * 16 + scan + 32 * 2**20
     )

@@ -123,8 +123,13 @@ def floquet_on_lattice(
     finer order follows)."""
     t0 = time.perf_counter()
     est = lattice_memory(system, lattice)
+    # what stays alive while finer lattices are searched near open clusters: this lattice's
+    # operators and vectors and the band's modes; the finer searches get the budget's rest
+    held = lattice_memory(system, lattice, searching=False)
     if isinstance(modes, BandAveraged):
         est += band_memory(system, int(modes.lam.size))
+        held += 3 * (2 * system.n) * int(modes.lam.size) * 16
+    room = max(resolve_budget(budget) - held, 1)
     check_budget(
         est,
         budget,
@@ -157,9 +162,9 @@ def floquet_on_lattice(
             if finer is None:
                 break
             est_finer = lattice_memory(system, finer)
-            if est_finer > resolve_budget(budget):
+            if est_finer > room:
                 break
-            used = max(used, est_finer)
+            used = max(used, held + est_finer)
             previous = (
                 continuation.start(system.n, finer)
                 if continuation is not None and near is None
@@ -185,13 +190,13 @@ def floquet_on_lattice(
             out, opened, need = refine_open(
                 system, out, lattice,
                 lambda o: search_result(system, o, lattice, near, used, t0, modes),
-                budget, continuation, max(MAX_AUTO_ORDER, lattice.order) + 2,
+                room, continuation, max(MAX_AUTO_ORDER, lattice.order) + 2,
             )  # fmt: skip
-            used = max(used, need)
+            used = max(used, held + need if need else 0)
             res = search_result(system, out, lattice, near, used, t0, modes)
             res.info["refined_near"] = opened
         if rtol is not None and near is None and (last or res.decided):
-            out, accuracy = refine_leading(system, out, lattice, rtol, budget, continuation)
+            out, accuracy = refine_leading(system, out, lattice, rtol, room, continuation)
             res = search_result(system, out, lattice, near, used, t0, modes)
             res.info["accuracy"] = accuracy
     return res

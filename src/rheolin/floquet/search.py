@@ -352,8 +352,9 @@ class LatticeSearch:
             # a warm start ends when each coarse eigenvector has its continuation: a
             # converged Ritz vector close to it (a mixed cluster's quota may never be
             # met by centred copies)
-            unit = vecs / np.linalg.norm(vecs, axis=0)
-            overlap = np.abs(run.warm_unit.conj().T @ unit).max(axis=1)
+            # normalized after the product: no copy of the Ritz vectors
+            overlap = np.abs(run.warm_unit.conj().T @ vecs) / np.linalg.norm(vecs, axis=0)
+            overlap = overlap.max(axis=1)
             return bool(np.all(overlap >= WARM_OVERLAP))
         return run.satisfied
 
