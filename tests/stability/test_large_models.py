@@ -56,10 +56,21 @@ def test_fine_rotor_has_the_unstable_verdict_of_the_three_node_model() -> None:
     """335 shaft nodes (2,010 DOF, past the dense limit) at 4220 rpm, inside the
     asymmetric-shaft band: decided unstable, and the 3-node model's leading exponent (dense
     Hill) found to the discretization error, its inertial frequency included (7e-5 relative
-    measured at 401 nodes). The stable speed is checked through ``rheolin run`` below."""
+    measured at 401 nodes). The stable speed is checked through ``rheolin run`` below. The
+    verdict's memory estimate bounds what it allocates (NumPy and Python, under
+    ``tracemalloc``) and is not far above it."""
+    import tracemalloc
+
     ref = rl.floquet(_assembled(refined_example("rotor", 3), 4220.0).system, 12, method="dense")
     assert not ref.stable
-    res = rl.floquet(_assembled(refined_example("rotor", 335), 4220.0).system)
+    system = _assembled(refined_example("rotor", 335), 4220.0).system
+    tracemalloc.start()
+    try:
+        res = rl.floquet(system)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak <= res.info["memory_estimate"] <= 4 * peak, (peak, res.info["memory_estimate"])
     assert res.decided and not res.stable, res.info.get("band")
     assert res.info["band"]["frames"] == ["rotor"]
     z, w = ref.exponents[0], ref.omega
