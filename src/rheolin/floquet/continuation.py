@@ -105,6 +105,14 @@ class Continuation:
         """Forget every kept search (the next call starts cold)."""
         self._kept.clear()
 
+    @property
+    def nbytes(self) -> int:
+        """Memory of the kept eigenvectors [bytes] (a verdict's estimate counts it: on a
+        large model the finer lattices' vectors are the larger part)."""
+        return sum(
+            int(v.nbytes) for _, out in self._kept.values() for v in out.vectors if v is not None
+        )
+
 
 def warm_start(
     start: LatticeExponents | None,

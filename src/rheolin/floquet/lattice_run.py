@@ -129,6 +129,12 @@ def floquet_on_lattice(
     if isinstance(modes, BandAveraged):
         est += band_memory(system, int(modes.lam.size))
         held += 3 * (2 * system.n) * int(modes.lam.size) * 16
+    kept = 0
+    if continuation is not None:  # the previous speed's searches stay until replaced
+        if est + continuation.nbytes > resolve_budget(budget):
+            continuation.clear()  # no room for them: this speed starts cold
+        kept = continuation.nbytes
+    held += kept
     room = max(resolve_budget(budget) - held, 1)
     check_budget(
         est,
@@ -156,7 +162,7 @@ def floquet_on_lattice(
         # finer lattices (p + 1, p + 2), only near them, as long as the memory budget allows
         finer: Lattice | None = lattice
         steps: list[Any] = []
-        used = est  # the largest lattice's estimate: what the verdict needed
+        used = est + kept  # the largest lattice's estimate: what the verdict needed
         while near is None and np.any(open_rows(out, system.omega)) and len(steps) < 2:
             finer = next_lattice(finer) if finer is not None else None
             if finer is None:
