@@ -50,6 +50,7 @@ __all__ = [
     "BandAveraged",
     "band_memory",
     "band_modes",
+    "band_vectors",
     "hopeless",
     "time_averaged",
 ]
@@ -308,8 +309,14 @@ def band_memory(system: PeriodicSystem, modes: int = BAND_MODES) -> int:
     blocks = 4 * n * modes * 16 if touched > DENSE_TOUCHED else 0
     scan = n * dense * 16 + nnz * LU_FILL * 16 + (2 * dense) ** 2 * 16 * 4 + blocks
     return int(
-        nnz * LU_FILL * 16 + 2 * (2 * n) * ncv * 8 + 3 * (2 * n) * modes * 16 + scan + 32 * 2**20
+        nnz * LU_FILL * 16 + 2 * (2 * n) * ncv * 8 + band_vectors(system, modes) + scan + 32 * 2**20
     )
+
+
+def band_vectors(system: PeriodicSystem, modes: int) -> int:
+    """Memory [bytes] a band of ``modes`` modes holds while the lattice searches run: its
+    right and left vectors and their ``W^H B`` (:class:`BandAveraged`)."""
+    return 3 * (2 * system.n) * int(modes) * 16
 
 
 def time_averaged(

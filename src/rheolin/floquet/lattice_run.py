@@ -16,7 +16,7 @@ from ..harmonics.lattice import Lattice
 from ..system.periodic import PeriodicSystem
 from . import large
 from .accuracy import leading_uncertainty, next_lattice, refine_leading, refine_open
-from .band import BandAveraged, band_memory
+from .band import BandAveraged, band_memory, band_vectors
 from .confirm import confirm_unresolved, open_rows
 from .continuation import Continuation
 from .footprint import lattice_memory
@@ -128,17 +128,18 @@ def floquet_on_lattice(
     held = lattice_memory(system, lattice, searching=False)
     if isinstance(modes, BandAveraged):
         est += band_memory(system, int(modes.lam.size))
-        held += 3 * (2 * system.n) * int(modes.lam.size) * 16
+        held += band_vectors(system, int(modes.lam.size))
+    limit = resolve_budget(budget)
     kept = 0
     if continuation is not None:  # the previous speed's searches stay until replaced
-        if est + continuation.nbytes > resolve_budget(budget):
+        if est + continuation.nbytes > limit:
             continuation.clear()  # no room for them: this speed starts cold
         kept = continuation.nbytes
     held += kept
-    room = max(resolve_budget(budget) - held, 1)
+    room = max(limit - held, 1)
     check_budget(
         est,
-        budget,
+        limit,
         f"the lattice Hill problem (order {lattice.order}, {len(lattice)} harmonics, "
         f"size {2 * system.n * len(lattice)})",
         "lower the lattice order",
