@@ -58,6 +58,14 @@ says more (``git show <commit>``).
 * ``search.WARM_STEPS`` (0e988ce): a first checkpoint at 4 steps for a search started from
   the previous speed's vectors halves the order-1 Arnoldi time (0.055 -> 0.026 s); a
   coarse-to-fine warm start gained nothing from it.
+* ``confirm.LEAK_ENERGY``, ``confirm.FAR`` (the grown confirmation lattice): over 250-6000 rpm
+  every 250 rpm, one process, the two ways alternated twice: 20.3-21.1 CPU s against
+  25.9-31.6 with order 2 (the same verdicts and largest real parts at all 24 speeds); the
+  grown lattice holds 15-29 harmonics where order 2 holds 35-61. The threshold barely
+  matters (7 speeds, first version: 10.2, 10.9 and 10.3 s at 0.02, 0.05 and 0.15 against
+  15.7 s), but 0.02 took all five cost-1 steps at 5000 rpm (57 harmonics). ``FAR`` = 10
+  left out 250-2000 rpm (clusters linked to the open ones at -322 and -523 1/s against the
+  leading -51 1/s); the gear variant's open cluster at 3825 rpm holds the leading exponent.
 * ``search.STALL_CHECKPOINT`` (527de51): before it, the 10 cold searches that could not meet
   their quota with centred copies ran to 54 steps: 0.70 of 0.93 s of Arnoldi at order 2; the
   verdict went from 3.05 to 2.7 s with the same exponents.

@@ -132,8 +132,8 @@ BRACKETS: dict[str, dict[str, Any]] = {
 #: steps with the others (the last change is the stated uncertainty).
 STEPS = (2000, 4000, 8000)
 
-#: Speeds [rpm] with a stored largest real part: near and inside both ranges.
-POINTS = (3420.0, 3700.0, 3880.0, 4480.0, 4800.0, 5020.0)
+#: Speeds [rpm] with a stored largest real part: below, near and inside both ranges.
+POINTS = (3000.0, 3420.0, 3700.0, 3880.0, 4480.0, 4800.0, 5020.0)
 
 #: Radau steps per period of the stored largest real parts.
 POINT_STEPS = 8000

@@ -16,9 +16,9 @@ from typing import Any
 import numpy as np
 
 from ..budget import memory_budget as resolve_budget
-from ..harmonics.lattice import Lattice, harmonic_lattice
+from ..harmonics.lattice import Lattice
 from ..system.periodic import PeriodicSystem
-from .confirm import confirm_unresolved, snapshot
+from .confirm import confirm_unresolved, lattice_order, snapshot
 from .footprint import lattice_memory
 from .outcome import LatticeExponents
 from .result import SAFETY
@@ -29,7 +29,6 @@ __all__ = [
     "RTOL_ORDERS",
     "ZETA_FLOOR",
     "leading_uncertainty",
-    "next_lattice",
     "refine_leading",
     "refine_open",
     "target",
@@ -107,13 +106,14 @@ def refine_leading(
             break
         todo = _cluster_rows(out, i, system.omega)
         order = max(order, int(out.order[i])) + 1
-        finer = _order(lattice, order)
+        finer = lattice_order(lattice, order)
         if finer is None or lattice_memory(system, finer) > limit:
             break
         previous = continuation.start(n, finer) if continuation is not None else None
         before = snapshot(out)
+        steps = out.info.get("confirmed")  # the verdict's confirmations, kept in its info
         out, fine = confirm_unresolved(system, out, finer, previous, todo=todo)
-        out.info.pop("confirmed", None)
+        _restore(out, steps)
         info["orders"].append(order)
         if continuation is not None and fine is not None:
             continuation.keep(n, finer, fine)
@@ -166,7 +166,7 @@ def refine_open(
             break
         todo = np.any([_cluster_rows(out, int(i), w) for i in rows], axis=0)
         order = max(lattice.order, int(out.order[rows].max())) + 1
-        finer = _order(lattice, order) if finest is None or order <= finest else None
+        finer = lattice_order(lattice, order) if finest is None or order <= finest else None
         if finer is None:
             break
         estimate = lattice_memory(system, finer)
@@ -174,12 +174,21 @@ def refine_open(
             break
         used = max(used, estimate)
         previous = continuation.start(n, finer) if continuation is not None else None
+        steps = out.info.get("confirmed")
         out, fine = confirm_unresolved(system, out, finer, previous, todo=todo)
-        out.info.pop("confirmed", None)
+        _restore(out, steps)
         orders.append(order)
         if fine is not None:
             searches.append((finer, fine))
     return out, orders, used
+
+
+def _restore(out: LatticeExponents, steps: Any) -> None:
+    """Put back the verdict's record of its confirmations (``info["confirmed"]``), which a
+    refinement's own confirmation overwrites."""
+    out.info.pop("confirmed", None)
+    if steps is not None:
+        out.info["confirmed"] = steps
 
 
 def _cluster_rows(out: LatticeExponents, row: int, w: float) -> np.ndarray:
@@ -191,18 +200,3 @@ def _cluster_rows(out: LatticeExponents, row: int, w: float) -> np.ndarray:
         return mask
     tol = 1e-9 * max(abs(z), w)
     return (np.abs(out.centre - z) <= tol) | (np.abs(out.centre - np.conj(z)) <= tol)
-
-
-def next_lattice(lattice: Lattice) -> Lattice | None:
-    """The lattice of the next order with the same steps (None past a million harmonics)."""
-    return _order(lattice, lattice.order + 1)
-
-
-def _order(lattice: Lattice, order: int) -> Lattice | None:
-    steps = dict(zip(lattice.generators, lattice.costs, strict=True))
-    if not steps:
-        return None
-    try:
-        return harmonic_lattice(steps, order, max_size=10**6)
-    except ValueError:
-        return None

@@ -6,7 +6,7 @@ import copy
 
 import numpy as np
 
-from ..harmonics.lattice import Lattice
+from ..harmonics.lattice import Lattice, harmonic_lattice
 from ..system.periodic import PeriodicSystem
 from .checks import agree, certify, split_gaps
 from .outcome import LatticeExponents
@@ -14,7 +14,30 @@ from .result import TRUNCATION_SAFETY
 from .search import lattice_exponents
 from .select import CLUSTER_TOL
 
-__all__ = ["confirm_unresolved", "open_rows", "short_rows", "snapshot"]
+__all__ = [
+    "FAR",
+    "LEAK_ENERGY",
+    "confirm_unresolved",
+    "grown_lattice",
+    "lattice_order",
+    "open_rows",
+    "short_rows",
+    "snapshot",
+    "standard_lattices",
+]
+
+
+#: A step of the coarse lattice is a direction the open eigenvectors leak to when its two
+#: harmonics (``+g`` and ``-g``) carry at least this fraction of one of their energies (and
+#: each vector's strongest step is one): the first confirmation grows the lattice along
+#: those steps only (:func:`confirmation_lattice`; bench/stability.py, design notes).
+LEAK_ENERGY = 0.05
+
+#: ... only when every open exponent lies this many times further left than the leading one
+#: (the heavily damped modes a shaft's 2x mixes with their copies): near the axis a lattice
+#: grown along the leaks can miss an exponent the next order holds (the gear variant inside
+#: its principal range lost its growing exponent so, tests/stability/test_runup_edge.py).
+FAR = 5.0
 
 
 def confirm_unresolved(
@@ -23,6 +46,7 @@ def confirm_unresolved(
     finer: Lattice,
     previous: LatticeExponents | None = None,
     todo: np.ndarray | None = None,
+    start: LatticeExponents | None = None,
 ) -> tuple[LatticeExponents, LatticeExponents | None]:
     """Settle the unresolved, uncertified representatives and the clusters short of their
     exponents (:func:`open_rows`; or the rows ``todo``) on a finer lattice.
@@ -44,6 +68,10 @@ def confirm_unresolved(
     eigenvectors (a few Arnoldi steps), the others from the coarse ones. Returns ``out`` and
     the finer search (None: nothing to settle), which the next speed can start from.
 
+    ``start``: the search whose eigenvectors the clusters start from (default ``out``; a
+    confirmation made again from the coarse search after another finer lattice, whose
+    eigenvectors ``out`` no longer holds).
+
     ``todo``: a mask of rows to search again instead (:func:`~rheolin.floquet.accuracy.
     refine_leading`: the leading exponent's cluster, resolved, for its accuracy).
 
@@ -55,18 +83,115 @@ def confirm_unresolved(
     which the next speed starts from).
     """
     if previous is None or todo is not None:
-        return _confirm(system, out, finer, previous, todo)
+        return _confirm(system, out, finer, previous, todo, start)
     before = snapshot(out)
-    got, fine = _confirm(system, out, finer, previous, None)
+    got, fine = _confirm(system, out, finer, previous, None, start)
     left = _open(got)
     if left == (0, 0):
         return got, fine
-    again, fine_again = _confirm(system, before, finer, None, None)
+    again, fine_again = _confirm(system, before, finer, None, None, start)
     if _open(again) == (0, 0):
         again.info["confirmed"]["retried"] = True
         return again, fine_again
     got.info["confirmed"]["retried"] = False
     return got, fine
+
+
+def standard_lattices(lattice: Lattice) -> list[Lattice]:
+    """The finer lattices open rows are confirmed on, in turn: the orders ``p + 1`` and
+    ``p + 2`` of ``lattice``'s steps (those past a million harmonics left out)."""
+    return [x for x in (lattice_order(lattice, lattice.order + k) for k in (1, 2)) if x is not None]
+
+
+def grown_lattice(out: LatticeExponents, lattice: Lattice, w: float) -> Lattice | None:
+    """The lattice a confirmation from the coarsest lattice starts on when every open
+    exponent lies far left of the leading one (None: not that case).
+
+    From the coarsest lattice (order 1, the default start), the finer one grows only along the
+    steps the open eigenvectors leak to (:data:`LEAK_ENERGY`): those keep their cost, every
+    other generator costs one more, and the order is 2. It holds the coarse lattice (a single
+    step costs at most 2) and every combination of two leaking steps; on the gearbox 15-29
+    harmonics where order 2 has 35-61. What it leaves out stays in each finer exponent's
+    truncation estimate (the harmonics one step outside), as for any lattice. Not from a
+    finer coarse lattice, nor when a cluster is short of exponents (the missing one has no
+    eigenvector to say where it lives) or an open row has none.
+
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> from rheolin.harmonics.lattice import harmonic_lattice
+    >>> coarse = harmonic_lattice({3: 1, 7: 1, 50: 2}, 1)
+    >>> coarse.indices.tolist()
+    [-7, -3, 0, 3, 7]
+    >>> y = np.zeros(2 * 5)  # one DOF: q then v on the 5 harmonics; energy on 0 and +-3
+    >>> y[[1, 2, 3]] = [0.4, 0.8, 0.4]
+    >>> out = SimpleNamespace(  # a resolved leading exponent, an open one far left of it
+    ...     indices=coarse.indices, exponents=np.array([-1 + 1j, -50 + 5j]), vectors=[None, y],
+    ...     unresolved=np.array([False, True]), certified=np.array([False, False]),
+    ...     complete=True, centre=np.array([1j, 5j]), related=[[], []])
+    >>> fine = grown_lattice(out, coarse, 1.0)
+    >>> dict(zip(fine.generators, fine.costs)), fine.indices.tolist()
+    ({3: 1, 7: 2, 50: 3}, [-7, -6, -3, 0, 3, 6, 7])
+    """
+    if lattice.order != 1 or short_rows(out, w).any():
+        return None
+    todo = open_rows(out, w)
+    linked = {z for i in np.flatnonzero(todo) for z in out.related[i]}
+    rows = [
+        i
+        for i in range(out.exponents.size)
+        if todo[i] or any(_members(np.asarray([out.centre[i]]), z, w)[0] for z in linked)
+    ]
+    lead = float(out.exponents.real.max(initial=-np.inf))
+    if not (lead < 0 and all(out.exponents[i].real < FAR * lead for i in rows)):
+        return None  # an open cluster near the axis: the whole next order
+    H = np.asarray(out.indices)
+    singles = {
+        g: np.flatnonzero(np.isin(H, (g, -g)))
+        for g, c in zip(lattice.generators, lattice.costs, strict=True)
+        if c == 1
+    }
+    leaking: set[int] = set()
+    for i in rows:
+        y = out.vectors[i]
+        if y is None:
+            if todo[i] and out.centre[i].imag >= 0:
+                return None  # an open row whose leak is not known
+            continue
+        nh = H.size
+        n = y.size // (2 * nh)
+        e2 = np.abs(y) ** 2
+        e = e2[: n * nh].reshape(nh, n).sum(axis=1) + e2[n * nh :].reshape(nh, n).sum(axis=1)
+        total = float(e.sum())
+        if total <= 0 or not singles:
+            continue
+        share = {g: float(e[at].sum()) / total for g, at in singles.items()}
+        leaking.add(max(share, key=lambda g: share[g]))
+        leaking.update(g for g, s in share.items() if s >= LEAK_ENERGY)
+    if not leaking:
+        return None
+    costs = {
+        g: c if g in leaking else c + 1
+        for g, c in zip(lattice.generators, lattice.costs, strict=True)
+    }
+    grown = lattice_order(lattice, 2, costs)
+    standard = lattice_order(lattice, 2)
+    if grown is None or (standard is not None and len(grown) >= len(standard)):
+        return None  # nothing saved: the standard orders
+    return grown
+
+
+def lattice_order(
+    lattice: Lattice, order: int, costs: dict[int, int] | None = None
+) -> Lattice | None:
+    """The lattice of ``order`` with the same steps, or these ``costs`` (None past a million
+    harmonics)."""
+    steps = dict(zip(lattice.generators, lattice.costs, strict=True)) if costs is None else costs
+    if not steps:
+        return None
+    try:
+        return harmonic_lattice(steps, order, max_size=10**6)
+    except ValueError:
+        return None
 
 
 def short_rows(out: LatticeExponents, w: float) -> np.ndarray:
@@ -125,8 +250,10 @@ def _confirm(
     finer: Lattice,
     previous: LatticeExponents | None,
     todo: np.ndarray | None,
+    start: LatticeExponents | None = None,
 ) -> tuple[LatticeExponents, LatticeExponents | None]:
     """:func:`confirm_unresolved` from one start."""
+    coarse = out if start is None else start
     w = system.omega
     if todo is None:
         todo = open_rows(out, w)
@@ -150,9 +277,9 @@ def _confirm(
         system,
         finer,
         near=centres,
-        start=out if previous is None else previous,
+        start=coarse if previous is None else previous,
         same_system=previous is None,
-        coarse=None if previous is None else out,
+        coarse=None if previous is None else coarse,
         defer_truncation=True,
     )
     fields = (

@@ -15,9 +15,9 @@ from ..budget import memory_budget as resolve_budget
 from ..harmonics.lattice import Lattice
 from ..system.periodic import PeriodicSystem
 from . import large
-from .accuracy import leading_uncertainty, next_lattice, refine_leading, refine_open
+from .accuracy import leading_uncertainty, refine_leading, refine_open
 from .band import BandAveraged, band_memory, band_vectors
-from .confirm import confirm_unresolved, open_rows
+from .confirm import confirm_unresolved, grown_lattice, open_rows, snapshot, standard_lattices
 from .continuation import Continuation
 from .footprint import lattice_memory
 from .resonance import floquet_lattice
@@ -160,30 +160,31 @@ def floquet_on_lattice(
         if continuation is not None and near is None:
             continuation.keep(system.n, lattice, out)
         # unresolved exponents and clusters short of theirs: search those clusters again on
-        # finer lattices (p + 1, p + 2), only near them, as long as the memory budget allows
-        finer: Lattice | None = lattice
+        # finer lattices (p + 1, p + 2), only near them, as long as the memory budget allows;
+        # first on the lattice grown along the steps they leak to when they all lie far left
+        # (docs/stability.md, section 4)
         steps: list[Any] = []
         used = est + kept  # the largest lattice's estimate: what the verdict needed
-        while near is None and np.any(open_rows(out, system.omega)) and len(steps) < 2:
-            finer = next_lattice(finer) if finer is not None else None
-            if finer is None:
-                break
-            est_finer = lattice_memory(system, finer)
-            if est_finer > room:
-                break
-            used = max(used, held + est_finer)
-            previous = (
-                continuation.start(system.n, finer)
-                if continuation is not None and near is None
-                else None
-            )
-            out, fine = confirm_unresolved(system, out, finer, previous)
-            if continuation is not None and fine is not None:
-                continuation.keep(system.n, finer, fine)
-            step = out.info.pop("confirmed")
-            steps.append(step)
-            if not step["clusters"]:
-                break  # nothing left that a finer lattice could settle
+        if near is None and np.any(open_rows(out, system.omega)):
+            chain = Chain(system, held, room, continuation)
+            grown = grown_lattice(out, lattice, system.omega)
+            standard = standard_lattices(lattice)
+            if grown is not None:
+                before = snapshot(out)  # its eigenvectors, which a confirmation drops
+                out = chain.run(out, [grown], grown=True)
+                if np.any(open_rows(out, system.omega)):
+                    # the rows it settled stay; the rest from the coarse eigenvectors
+                    out = chain.run(out, standard, start=before)
+                if np.any(open_rows(out, system.omega)):
+                    # still open: every open cluster again, as without the grown lattice
+                    # (a cluster searched apart from the others it was open with can miss
+                    # the joint settlement)
+                    for step in chain.steps:
+                        step["kept"] = False
+                    out = chain.run(before, standard)
+            else:
+                out = chain.run(out, standard)
+            steps, used = chain.steps, max(used, chain.used)
         if steps:
             out.info["confirmed"] = steps
         if out.settle is not None:
@@ -207,6 +208,47 @@ def floquet_on_lattice(
             res = search_result(system, out, lattice, near, used, t0, modes)
             res.info["accuracy"] = accuracy
     return res
+
+
+class Chain:
+    """Confirmations on finer lattices in turn, each near the rows still open, within the
+    room the memory budget leaves; records each step (``steps``) and the largest memory
+    estimate (``used``)."""
+
+    def __init__(
+        self, system: PeriodicSystem, held: int, room: int, continuation: Continuation | None
+    ) -> None:
+        self.system, self.held, self.room, self.continuation = system, held, room, continuation
+        self.steps: list[dict[str, Any]] = []
+        self.used = 0
+
+    def run(
+        self, out: Any, lattices: list[Lattice], start: Any = None, *, grown: bool = False
+    ) -> Any:
+        """``out`` confirmed on ``lattices`` in turn; the first from ``start``'s
+        eigenvectors (default: its own). ``grown``: the lattices are grown along the leaks
+        (recorded in each step, with its harmonics and whether its outcome was ``kept``)."""
+        system, continuation = self.system, self.continuation
+        for finer in lattices:
+            if not np.any(open_rows(out, system.omega)):
+                break
+            est_finer = lattice_memory(system, finer)
+            if est_finer > self.room:
+                break
+            self.used = max(self.used, self.held + est_finer)
+            previous = continuation.start(system.n, finer) if continuation is not None else None
+            out, fine = confirm_unresolved(system, out, finer, previous, start=start)
+            start = None
+            if continuation is not None and fine is not None:
+                continuation.keep(system.n, finer, fine)
+            step = out.info.pop("confirmed")
+            step["harmonics"] = len(finer)
+            step["grown"] = grown
+            step["kept"] = True
+            self.steps.append(step)
+            if not step["clusters"]:
+                break  # nothing left that a finer lattice could settle
+        return out
 
 
 def search_result(
