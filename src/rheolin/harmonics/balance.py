@@ -380,6 +380,16 @@ class HarmonicBalance:
         return np.stack([apply(np.broadcast_to(e, (self.pos.size, cols.size))) for e in eye], -1)
 
     # ------------------------------------------------------------------ coupled
+    def coupled_entries(self) -> int:
+        """Entries :meth:`coupled_matrix` stores (duplicates counted), from the blocks'
+        patterns and the harmonic pairs they couple, without assembling it."""
+        full = np.asarray(self.full, dtype=np.int64)
+        total = 0
+        for k, block in self._blocks.items():
+            r, _, _ = block.entries()
+            total += int(np.isin(full + int(k), full).sum()) * int(r.size)
+        return total
+
     def coupled_matrix(self, harmonics: Iterable[int] | None = None) -> sp.csc_array:
         """The assembled block-sparse coupled matrix over the full set ``H`` (for ``direct``);
         with ``harmonics``, only the coefficient harmonics ``k`` listed (0 is always kept):

@@ -403,4 +403,7 @@ def _auto(
         opts,
         f"auto: gmres failed ({first.message}); fell back to direct",
     )
-    return fallback if fallback.success else first
+    if fallback.success:
+        return fallback
+    first.message = fallback.message  # it says why gmres failed, then why direct did
+    return first
