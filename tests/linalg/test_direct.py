@@ -145,3 +145,23 @@ def test_analysis_is_shared_by_speeds_with_one_pattern() -> None:
 def test_unknown_or_missing_backend_is_named() -> None:
     with pytest.raises(ValueError, match="sparse_backend"):
         resolve_backend("mumps")
+
+
+@pytest.mark.parametrize("name", [b for b in ("superlu", "umfpack") if b in available_backends()])
+def test_a_singular_harmonic_is_named_once(name: str) -> None:
+    """A sparse 2-DOF system undamped at 2 rad/s on w1 = 1 rad/s: GMRES cannot run, and the
+    message names the harmonic and the backend's reason once (it read "A0(n=2) is singular
+    (n=-1) is singular (...)")."""
+    K1 = sp.csr_array(0.1 * np.array([[1.0, 0.5], [0.5, 1.0]]))
+    f = np.array([1.0, 0.0])
+    system = rl.PeriodicSystem(
+        1.0,
+        M={0: sp.csr_array(np.eye(2))},
+        K={0: sp.csr_array(np.diag([4.0, 9.0])), 1: K1, -1: K1},
+        f={1: f, -1: f},
+    )
+    H = rl.HarmonicSet.closure(system, order=4)
+    sol = rl.solve(system, H, method="gmres", backend="lu", sparse_backend=name, stability=False)
+    assert not sol.success
+    assert sol.message.startswith("A0(n=2) is singular (")
+    assert "is singular (n=" not in sol.message and "n=-1" not in sol.message

@@ -11,3 +11,4 @@ class SingularBlockError(RuntimeError):
     def __init__(self, n: int, detail: str) -> None:
         super().__init__(f"A0(n={n}) is singular ({detail})")
         self.n = n
+        self.detail = detail

@@ -169,7 +169,7 @@ class FactorStore:
         try:
             f = an.factor(data)
         except SingularBlockError as exc:
-            raise SingularBlockError(n, str(exc).split("(", 1)[-1].rstrip(")")) from None
+            raise SingularBlockError(n, exc.detail) from None
         if self.backend == "superlu":  # probed by splu_checked, and SuperLU is the fallback
             return f
         b = np.array(probe_vector(self.pencil.n))
@@ -181,7 +181,7 @@ class FactorStore:
             try:
                 f = fallback.factor(data)
             except SingularBlockError as exc:
-                raise SingularBlockError(n, str(exc).split("(", 1)[-1].rstrip(")")) from None
+                raise SingularBlockError(n, exc.detail) from None
         return f
 
     def use(self, i: int, fn: Callable[[Factor], None]) -> None:
