@@ -147,19 +147,38 @@ def test_unknown_or_missing_backend_is_named() -> None:
         resolve_backend("mumps")
 
 
-@pytest.mark.parametrize("name", [b for b in ("superlu", "umfpack") if b in available_backends()])
-def test_a_singular_harmonic_is_named_once(name: str) -> None:
-    """A sparse 2-DOF system undamped at 2 rad/s on w1 = 1 rad/s: GMRES cannot run, and the
-    message names the harmonic and the backend's reason once (it read "A0(n=2) is singular
-    (n=-1) is singular (...)")."""
+def _undamped_at_2w1() -> rl.PeriodicSystem:
+    """A sparse 2-DOF system undamped at 2 rad/s on w1 = 1 rad/s."""
     K1 = sp.csr_array(0.1 * np.array([[1.0, 0.5], [0.5, 1.0]]))
     f = np.array([1.0, 0.0])
-    system = rl.PeriodicSystem(
+    return rl.PeriodicSystem(
         1.0,
         M={0: sp.csr_array(np.eye(2))},
         K={0: sp.csr_array(np.diag([4.0, 9.0])), 1: K1, -1: K1},
         f={1: f, -1: f},
     )
+
+
+@pytest.mark.skipif("pardiso" not in available_backends(), reason="needs MKL PARDISO")
+def test_gmres_reports_its_recomputed_residual() -> None:
+    """Under PARDISO the singular A0(2) is factorized with perturbed pivots and GMRES
+    stalls; its message gives the residual of its answer, not the Krylov estimate (which
+    read 0)."""
+    system = _undamped_at_2w1()
+    H = rl.HarmonicSet.closure(system, order=4)
+    sol = rl.solve(
+        system, H, method="gmres", backend="lu", sparse_backend="pardiso", stability=False
+    )
+    assert not sol.success
+    rel = sol.info["relative_residual"]
+    assert rel > 0 and f"relative residual {rel:.3g}" in sol.message
+
+
+@pytest.mark.parametrize("name", [b for b in ("superlu", "umfpack") if b in available_backends()])
+def test_a_singular_harmonic_is_named_once(name: str) -> None:
+    """The system undamped at 2 w1: GMRES cannot run, and the message names the harmonic
+    and the backend's reason once (it read "A0(n=2) is singular (n=-1) is singular (...)")."""
+    system = _undamped_at_2w1()
     H = rl.HarmonicSet.closure(system, order=4)
     sol = rl.solve(system, H, method="gmres", backend="lu", sparse_backend=name, stability=False)
     assert not sol.success

@@ -445,10 +445,12 @@ def solve_gmres(op: HarmonicBalance, opts: Options) -> SolverOutcome:
         msg = f"converged in {its} iterations ({strategy} strategy){tail}"
         return SolverOutcome(Q, True, 0, msg, "gmres", its, history, extra)
     if info > 0:
-        last = history[-1] if history else float("nan")
+        # the recomputed residual: the Krylov estimate (``history``) reads 0 where the
+        # preconditioner is singular to round-off (an undamped resonance under PARDISO)
+        last = op.relative_residual(Q)
         msg = (
-            f"gmres did not reach rtol={opts.rtol:g} in {its} iterations (residual {last:.3g})"
-            f"{tail}"
+            f"gmres did not reach rtol={opts.rtol:g} in {its} iterations (relative residual "
+            f"{last:.3g}){tail}"
         )
         return SolverOutcome(Q, False, 1, msg, "gmres", its, history, extra)
     msg = f"gmres breakdown (info={info}){tail}"
