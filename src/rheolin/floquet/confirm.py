@@ -13,6 +13,7 @@ from .outcome import LatticeExponents
 from .result import TRUNCATION_SAFETY
 from .search import lattice_exponents
 from .select import CLUSTER_TOL
+from .shift_invert import harmonic_energy
 
 __all__ = [
     "FAR",
@@ -30,10 +31,11 @@ __all__ = [
 #: A step of the coarse lattice is a direction the open eigenvectors leak to when its two
 #: harmonics (``+g`` and ``-g``) carry at least this fraction of one of their energies (and
 #: each vector's strongest step is one): the first confirmation grows the lattice along
-#: those steps only (:func:`confirmation_lattice`; bench/stability.py, design notes).
+#: those steps only (:func:`grown_lattice`; bench/stability.py, design notes).
 LEAK_ENERGY = 0.05
 
-#: ... only when every open exponent lies this many times further left than the leading one
+#: The lattice grown along the leaks is used only when every open exponent lies this many
+#: times further left than the leading one
 #: (the heavily damped modes a shaft's 2x mixes with their copies): near the axis a lattice
 #: grown along the leaks can miss an exponent the next order holds (the gear variant inside
 #: its principal range lost its growing exponent so, tests/stability/test_runup_edge.py).
@@ -135,34 +137,31 @@ def grown_lattice(out: LatticeExponents, lattice: Lattice, w: float) -> Lattice 
     if lattice.order != 1 or short_rows(out, w).any():
         return None
     todo = open_rows(out, w)
-    linked = {z for i in np.flatnonzero(todo) for z in out.related[i]}
-    rows = [
-        i
-        for i in range(out.exponents.size)
-        if todo[i] or any(_members(np.asarray([out.centre[i]]), z, w)[0] for z in linked)
-    ]
+    rows = todo.copy()  # with the clusters they share their quota with
+    for z in {z for i in np.flatnonzero(todo) for z in out.related[i]}:
+        rows |= _members(out.centre, z, w)
     lead = float(out.exponents.real.max(initial=-np.inf))
-    if not (lead < 0 and all(out.exponents[i].real < FAR * lead for i in rows)):
+    if not (lead < 0 and np.all(out.exponents.real[rows] < FAR * lead)):
         return None  # an open cluster near the axis: the whole next order
     H = np.asarray(out.indices)
+    nh = H.size
     singles = {
         g: np.flatnonzero(np.isin(H, (g, -g)))
         for g, c in zip(lattice.generators, lattice.costs, strict=True)
         if c == 1
     }
+    if not singles:
+        return None
     leaking: set[int] = set()
-    for i in rows:
+    for i in np.flatnonzero(rows):
         y = out.vectors[i]
         if y is None:
             if todo[i] and out.centre[i].imag >= 0:
                 return None  # an open row whose leak is not known
             continue
-        nh = H.size
-        n = y.size // (2 * nh)
-        e2 = np.abs(y) ** 2
-        e = e2[: n * nh].reshape(nh, n).sum(axis=1) + e2[n * nh :].reshape(nh, n).sum(axis=1)
+        e = harmonic_energy(y, y.size // (2 * nh), nh)
         total = float(e.sum())
-        if total <= 0 or not singles:
+        if total <= 0:
             continue
         share = {g: float(e[at].sum()) / total for g, at in singles.items()}
         leaking.add(max(share, key=lambda g: share[g]))

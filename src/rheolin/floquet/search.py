@@ -38,6 +38,7 @@ from .shift_invert import (
     arnoldi,
     factor,
     harmonic_block,
+    harmonic_energy,
     polish,
 )
 
@@ -210,9 +211,7 @@ class LatticeSearch:
         """A Ritz pair (or tracked pair) with its energy per harmonic, the averaged modes it
         carries and the clusters it may stand for."""
         n, nh, H, avg = self.n, self.nh, self.H, self.avg
-        with np.errstate(under="ignore"):
-            e2 = np.abs(yb) ** 2
-        e = e2[: n * nh].reshape(nh, n).sum(axis=1) + e2[n * nh :].reshape(nh, n).sum(axis=1)
+        e = harmonic_energy(yb, n, nh)
         tot = e.sum()
         e = e / tot if tot > 0 else e
         top = np.argsort(-e, kind="stable")[:2]

@@ -204,6 +204,16 @@ def pencil_norms(hill: LatticeHill, sq: np.ndarray, sv: np.ndarray) -> tuple[flo
     return normA, normB
 
 
+def harmonic_energy(y: np.ndarray, n: int, nh: int) -> np.ndarray:
+    """Energy ``|q|^2 + |v|^2`` of the first-order vector ``y`` (``n`` DOFs on ``nh``
+    harmonics) per harmonic."""
+    with np.errstate(under="ignore"):
+        e2 = np.abs(y) ** 2
+    return np.asarray(
+        e2[: n * nh].reshape(nh, n).sum(axis=1) + e2[n * nh :].reshape(nh, n).sum(axis=1)
+    )
+
+
 def harmonic_block(y: np.ndarray, i: int, n: int, nh: int) -> np.ndarray:
     """The ``(q, v)`` block of the first-order vector ``y`` (``n`` DOFs on ``nh`` harmonics)
     at harmonic position ``i``."""

@@ -31,47 +31,37 @@ ASSEMBLY_BYTES = 80
 UNANALYSED_UNKNOWNS = 100_000
 
 
+#: What to change when the direct method does not fit.
+ADVICE = (
+    "use method='gmres' (the time-averaged system must be regular at every harmonic: "
+    "damp an undamped resonance), fewer harmonics or a smaller model, or raise the "
+    "budget (RHEOLIN_SOLVE_MEMORY or memory_budget=)"
+)
+
+
 @register("direct")
 def solve_direct(op: HarmonicBalance, opts: Options) -> SolverOutcome:
     """Assemble the coupled matrix over the full set ``H`` and factorize it."""
     entries = op.coupled_entries()  # counted before anything is assembled
     if entries > MAX_COUPLED_NNZ:
-        return SolverOutcome(
-            np.zeros_like(op.rhs),
-            False,
-            3,
-            f"coupled matrix too large for method='direct' ({entries} nonzeros)",
-            "direct",
-        )
+        return _failed(op, f"coupled matrix too large for method='direct' ({entries} nonzeros)")
     if ASSEMBLY_BYTES * entries > op.budget:
-        return SolverOutcome(
-            np.zeros_like(op.rhs),
-            False,
-            3,
+        return _failed(
+            op,
             f"method='direct': assembling the coupled matrix ({entries:,} entries) needs an "
             f"estimated {format_bytes(ASSEMBLY_BYTES * entries)}, more than the memory budget "
-            f"of {format_bytes(op.budget)}; use method='gmres', fewer harmonics or a smaller "
-            "model, or raise the budget (RHEOLIN_SOLVE_MEMORY or memory_budget=)",
-            "direct",
+            f"of {format_bytes(op.budget)}; {ADVICE}",
         )
     A = op.coupled_matrix()
     refused = factor_refusal(A, op.budget)
     if refused:
-        return SolverOutcome(np.zeros_like(op.rhs), False, 3, refused, "direct")
+        return _failed(op, refused)
     try:
         lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A")  # partial pivoting: the reference
     except RuntimeError as exc:
-        return SolverOutcome(
-            np.zeros_like(op.rhs), False, 3, f"coupled matrix is singular ({exc})", "direct"
-        )
+        return _failed(op, f"coupled matrix is singular ({exc})")
     except MemoryError:
-        return SolverOutcome(
-            np.zeros_like(op.rhs),
-            False,
-            3,
-            "out of memory factorizing the coupled matrix",
-            "direct",
-        )
+        return _failed(op, "out of memory factorizing the coupled matrix")
     x = lu.solve(op.full_rhs().ravel())
     Q = op.half(x.reshape(op.full.size, op.n_dof))
     return SolverOutcome(Q, True, 0, "solved the coupled system by sparse LU", "direct")
@@ -100,29 +90,29 @@ def factor_refusal(A: Any, budget: int) -> str:
     allocates as it fills, and the coupled matrix of a 50,000-DOF gearbox on 330 harmonics
     went past 19 GB under a budget of 16 GB."""
     n = int(A.shape[0])
-    advice = (
-        "use method='gmres' (the time-averaged system must be regular at every harmonic: "
-        "damp an undamped resonance), fewer harmonics or a smaller model, or raise the "
-        "budget (RHEOLIN_SOLVE_MEMORY or memory_budget=)"
-    )
     head = f"method='direct': the sparse LU of the coupled matrix ({n:,} unknowns)"
     if ANALYSIS_BYTES * A.nnz > budget:
         return (
             f"{head} cannot even be analysed within the memory budget of "
-            f"{format_bytes(budget)} ({A.nnz:,} entries); {advice}"
+            f"{format_bytes(budget)} ({A.nnz:,} entries); {ADVICE}"
         )
     estimate = factor_estimate(A)
     if estimate is None:
         if n > UNANALYSED_UNKNOWNS:
             return (
                 f"{head} has no estimate of its factor here (PARDISO is not installed) and is "
-                f"factorized only up to {UNANALYSED_UNKNOWNS:,} unknowns; {advice}"
+                f"factorized only up to {UNANALYSED_UNKNOWNS:,} unknowns; {ADVICE}"
             )
         return ""
     if estimate > budget:
         return (
             f"{head} needs an estimated {format_bytes(estimate)} (its symbolic analysis's "
             f"factor entries times {SUPERLU_FILL:g} for SuperLU's partial pivoting), more "
-            f"than the memory budget of {format_bytes(budget)}; {advice}"
+            f"than the memory budget of {format_bytes(budget)}; {ADVICE}"
         )
     return ""
+
+
+def _failed(op: HarmonicBalance, message: str) -> SolverOutcome:
+    """The outcome of a direct solve that did not run (status 3, no response)."""
+    return SolverOutcome(np.zeros_like(op.rhs), False, 3, message, "direct")
