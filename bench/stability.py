@@ -48,7 +48,26 @@ says more (``git show <commit>``).
   4.3 ms on average over a verdict, whose order-2 confirmation took 0.12 s less per speed with
   PARDISO); order 3 (14,994) 10-11.5 / 1.4-2.1 ms against 18-40 / 1.0-1.2 ms; order 4
   (41,454) 74 / 5.5 ms against 550 / 11 ms. A cold Arnoldi run (up to 54 solves per factor)
-  favours SuperLU's solves up to order 3.
+  favours SuperLU's solves up to order 3. With the ordering reused
+  (``shift_invert.Ordered``) a polish's factor and three solves cost 4.5 ms against 7.2 with
+  PARDISO at order 2 (4,410 unknowns; PARDISO's solves 1.3 ms against SuperLU's 0.4), about
+  the same at order 3, and 20 / 33 ms against 44 / 72 ms on the order-1 lattices of the fine
+  gearbox (13,050 and 24,930 unknowns): ``PARDISO_ABOVE`` is 20,000.
+* ``shift_invert.Ordered``: SuperLU's minimum-degree ordering of ``Q(sigma)`` depends on its
+  pattern only, which every shift of a lattice shares; factorizing the symmetrically
+  permuted ``Q[p][:, p]`` in its natural order gives the same fill (1.23 and 1.35 x the
+  entries) in 0.55 ms against 1.19 (order 1, 882 unknowns) and 3.3 against 4.6 ms (order 2).
+  Over the 24 spinning speeds of the Campbell diagram the exponents are those of a fresh
+  ordering to 1e-12.
+* ``search.CONFIRM_STEPS``: searches started from a coarser lattice's eigenvectors, at 1000,
+  2000, ..., 5000 rpm: with a first checkpoint at 4 steps none ended there; with checkpoints at
+  6 and 8, 14 of 41 ended at 6 steps, 18 at 8 and 9 at 10, with the same exponents (to 1e-12)
+  at all 24 Campbell speeds.
+* ``stability_map`` assembles through ``model.speed_template()``: the gearbox's system in
+  4.7 ms against 72 ms for ``model.assemble``, the same matrices (bit for bit).
+* ``averaged.Averaged.gershgorin`` computes every mode's radius on its first call: 28 ms
+  for the gearbox's 252 modes, where the searches and confirmations asked for the upper half
+  first (15 ms) and then a few modes at a time (about 12 calls of 4 ms a speed).
 * ``shift_invert.pencil_norms`` (c1e7168): assembling the first-order pencil for its 1-norms
   cost 0.15 s at order 3; the column sums of the lattice couplings give the same norms
   (``tests/stability/test_lattice.py`` checks them against ``scipy.sparse.linalg.norm``).

@@ -89,7 +89,12 @@ class Averaged:
         _, terms, known = cache
         missing = sorted({int(m) for m in modes if int(m) not in known})
         if missing:
-            known.update(zip(missing, _radii(system, self, terms, missing), strict=True))
+            # every mode at once on the first call: the searches and their confirmations
+            # ask again for the conjugates and the modes of each cluster, and one product
+            # over all modes costs less than a few over some
+            everything = [m for m in range(self.lam.size) if m not in known]
+            batch = everything if len(missing) < len(everything) and not known else missing
+            known.update(zip(batch, _radii(system, self, terms, batch), strict=True))
         return [known[int(m)] for m in modes]
 
 
@@ -169,20 +174,15 @@ def _radii(
         # transform enter, the rest of ``w_j^H E_k`` is zero
         total = np.zeros((len(modes), avg.X.shape[1]), dtype=complex)
         if Kc is not None:
-            total += _left(lr, Kc) @ avg.X[cq]
+            total += (lr @ Kc) @ avg.X[cq]
         if Dc is not None or Mc is not None:
-            pv = _left(lr, Dc) if Dc is not None else 0.0
+            pv = lr @ Dc if Dc is not None else 0.0
             if Mc is not None:
                 s = avg.lam[modes] - 1j * k * w
-                pv = pv + s[:, None] * _left(lr, Mc)
+                pv = pv + s[:, None] * (lr @ Mc)
             total += pv @ avg.X[n + cv]
         out += np.abs(total).sum(axis=1)
     return out.tolist()
-
-
-def _left(rows: np.ndarray, block: sp.csr_array) -> np.ndarray:
-    """``rows @ block`` for dense ``rows`` and a sparse ``block``."""
-    return np.asarray((block.T @ rows.T).T)
 
 
 def _compact(mats: list[Any]) -> tuple[Any, ...]:

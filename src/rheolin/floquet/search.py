@@ -57,6 +57,11 @@ ARNOLDI_TOL = 1e-10
 #: :data:`ARNOLDI_STEPS` (bench/stability.py, design notes).
 WARM_STEPS = (4, *ARNOLDI_STEPS)
 
+#: Checkpoints of a search started from a coarser lattice's eigenvectors (a confirmation): on
+#: the gearbox a third of them end at 6 steps and another third at 8, which the first cold
+#: checkpoint (10) made wait (bench/stability.py, design notes).
+CONFIRM_STEPS = (6, 8, *ARNOLDI_STEPS)
+
 #: A cold search that cannot meet its quota with centred copies ends at the first checkpoint
 #: from this one (24 steps) where its cluster's exponents are converged and the best centroid
 #: among them improved by less than ``STALL_GAIN`` since the previous checkpoint: more steps
@@ -279,14 +284,19 @@ class LatticeSearch:
         rows = None if self.same_system else self.previous(cid)
         resolved = self.coarse is not None
         warm, at = warm_start(self.start, H, n, sigma, w, rng, resolved=resolved, rows=rows)
-        steps = WARM_STEPS if warm is not None and not self.same_system else ARNOLDI_STEPS
+        steps: tuple[int, ...] = (
+            WARM_STEPS if warm is not None and not self.same_system else ARNOLDI_STEPS
+        )
+        many = steps is ARNOLDI_STEPS  # a cold or coarse start: a long run on this factor
         if warm is None and not self.same_system:
             warm, at = warm_start(self.coarse, H, n, sigma, w, rng)
+        if warm is not None and steps is ARNOLDI_STEPS:
+            steps = CONFIRM_STEPS
         if warm is not None:
             sigma = at  # where the coarse exponents are: their continuations converge first
             self.warm_starts.append(cid)
         t1 = time.perf_counter()
-        lu = factor(self.hill, sigma, w, many=steps is ARNOLDI_STEPS)
+        lu = factor(self.hill, sigma, w, many=many)
         sigma = lu.sigma
         self.lu_seconds += time.perf_counter() - t1
         apply = ShiftInvert(self.pencil, lu)

@@ -42,8 +42,9 @@ DGKS = 0.7071
 #: Above these many unknowns the lattice operator is factorized by MKL PARDISO where
 #: installed (one analysis per lattice serves every shift): a factor used a few times (the
 #: polish, a warm-started Arnoldi run) gains from it sooner than one serving the many solves
-#: of a cold Arnoldi run (bench/stability.py, design notes).
-PARDISO_ABOVE = 2000
+#: of a cold Arnoldi run; below, SuperLU in the ordering of the lattice's first factor
+#: (:class:`Ordered`) is faster (bench/stability.py, design notes).
+PARDISO_ABOVE = 20000
 PARDISO_ABOVE_ARNOLDI = 30000
 
 
@@ -91,6 +92,62 @@ def arnoldi(apply: Any, v0: np.ndarray, accept: Any, *, steps: tuple[int, ...], 
                 return
 
 
+class Ordered:
+    """The minimum-degree ordering of a lattice's ``Q`` pattern, found by its first SuperLU
+    factorization and reused for every later shift (the pattern does not change with the
+    shift): the symmetrically permuted ``Q[p][:, p]`` is factorized in its natural order,
+    which saves the ordering (half of SuperLU's time on an order-1 gearbox lattice, a
+    quarter on order 2) and gives the same factors (bench/stability.py, design notes)."""
+
+    def __init__(self, Q: sp.csc_array, perm_c: np.ndarray) -> None:
+        self.p = np.argsort(perm_c)  # Q[p][:, p] has SuperLU's fill in its natural order
+        self.pattern = (Q.shape, Q.indptr.copy(), Q.indices.copy())
+        marks = sp.csc_array(
+            (np.arange(1, Q.nnz + 1, dtype=float), Q.indices, Q.indptr), shape=Q.shape
+        )
+        permuted = sp.csc_array(marks[self.p][:, self.p])
+        permuted.sort_indices()
+        self.gather = permuted.data.astype(np.int64) - 1  # permuted.data = Q.data[gather]
+        self.indices, self.indptr = permuted.indices, permuted.indptr
+
+    def matches(self, Q: sp.csc_array) -> bool:
+        shape, indptr, indices = self.pattern
+        return bool(
+            Q.shape == shape
+            and np.array_equal(Q.indptr, indptr)
+            and np.array_equal(Q.indices, indices)
+        )
+
+    def factor(self, Q: sp.csc_array) -> OrderedLU:
+        B = sp.csc_array((Q.data[self.gather], self.indices, self.indptr), shape=Q.shape)
+        opts = {**SPLU, "permc_spec": "NATURAL"}
+        return OrderedLU(spla.splu(B, **opts), self.p)
+
+
+class OrderedLU:
+    """A SuperLU factor of ``Q[p][:, p]`` that solves with ``Q``."""
+
+    def __init__(self, lu: Any, p: np.ndarray) -> None:
+        self.lu, self.p = lu, p
+
+    def solve(self, b: np.ndarray, trans: str = "N") -> np.ndarray:
+        y = self.lu.solve(np.ascontiguousarray(b[self.p]), trans=trans)
+        x = np.empty_like(y)
+        x[self.p] = y
+        return x
+
+
+def superlu(hill: LatticeHill, Q: sp.csc_array) -> Any:
+    """SuperLU of ``Q`` on ``hill``'s lattice: the first with minimum degree, the next ones
+    in its ordering (:class:`Ordered`)."""
+    known = hill._ordered
+    if known is not None and known.matches(Q):
+        return known.factor(Q)
+    lu = spla.splu(Q, **SPLU)
+    hill._ordered = Ordered(Q, lu.perm_c)
+    return lu
+
+
 class Shifted:
     """A sparse LU of ``Q(sigma)`` that remembers its (possibly nudged) shift."""
 
@@ -134,7 +191,7 @@ def factor(hill: LatticeHill, sigma: complex, w: float, *, many: bool = False) -
                 f = pardiso_factor(hill, Q)
                 if f is not None:
                     return Shifted(f, sigma, Q)
-            return Shifted(spla.splu(Q, **SPLU), sigma, Q)
+            return Shifted(superlu(hill, Q), sigma, Q)
         except RuntimeError:  # exactly singular
             sigma += 1e-7 * scale * (1 + 1j) * 10**attempt
     raise RuntimeError(f"cannot factorize the lattice Hill operator near {sigma}")
