@@ -58,8 +58,8 @@ ARNOLDI_TOL = 1e-10
 WARM_STEPS = (4, *ARNOLDI_STEPS)
 
 #: Checkpoints of a search started from a coarser lattice's eigenvectors (a confirmation): on
-#: the gearbox a third of them end at 6 steps and another third at 8, which the first cold
-#: checkpoint (10) made wait (bench/stability.py, design notes).
+#: the gearbox, of those that ended at the first cold checkpoint (10 steps), a third end at 6
+#: and nearly half at 8 (bench/stability.py, design notes).
 CONFIRM_STEPS = (6, 8, *ARNOLDI_STEPS)
 
 #: A cold search that cannot meet its quota with centred copies ends at the first checkpoint
