@@ -92,8 +92,7 @@ class Averaged:
             # every mode at once on the first call: the searches and their confirmations
             # ask again for the conjugates and the modes of each cluster, and one product
             # over all modes costs less than a few over some
-            everything = [m for m in range(self.lam.size) if m not in known]
-            batch = everything if len(missing) < len(everything) and not known else missing
+            batch = missing if known else list(range(self.lam.size))
             known.update(zip(batch, _radii(system, self, terms, batch), strict=True))
         return [known[int(m)] for m in modes]
 

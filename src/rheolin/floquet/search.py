@@ -284,19 +284,16 @@ class LatticeSearch:
         rows = None if self.same_system else self.previous(cid)
         resolved = self.coarse is not None
         warm, at = warm_start(self.start, H, n, sigma, w, rng, resolved=resolved, rows=rows)
-        steps: tuple[int, ...] = (
-            WARM_STEPS if warm is not None and not self.same_system else ARNOLDI_STEPS
-        )
-        many = steps is ARNOLDI_STEPS  # a cold or coarse start: a long run on this factor
+        continued = warm is not None and not self.same_system  # the previous speed's vectors
         if warm is None and not self.same_system:
             warm, at = warm_start(self.coarse, H, n, sigma, w, rng)
-        if warm is not None and steps is ARNOLDI_STEPS:
-            steps = CONFIRM_STEPS
+        # a coarser lattice's vectors (a confirmation) converge slower; a cold start slowest
+        steps = WARM_STEPS if continued else CONFIRM_STEPS if warm is not None else ARNOLDI_STEPS
         if warm is not None:
             sigma = at  # where the coarse exponents are: their continuations converge first
             self.warm_starts.append(cid)
         t1 = time.perf_counter()
-        lu = factor(self.hill, sigma, w, many=many)
+        lu = factor(self.hill, sigma, w, many=not continued)  # a long run on this factor
         sigma = lu.sigma
         self.lu_seconds += time.perf_counter() - t1
         apply = ShiftInvert(self.pencil, lu)

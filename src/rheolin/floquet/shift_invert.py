@@ -15,6 +15,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..harmonics.hill_lattice import LatticeHill
+from ..linalg.direct import csc_pattern_key
 
 __all__ = ["DGKS", "LU_FILL", "PARDISO_ABOVE", "PARDISO_ABOVE_ARNOLDI", "SPLU"]
 
@@ -101,7 +102,7 @@ class Ordered:
 
     def __init__(self, Q: sp.csc_array, perm_c: np.ndarray) -> None:
         self.p = np.argsort(perm_c)  # Q[p][:, p] has SuperLU's fill in its natural order
-        self.pattern = (Q.shape, Q.indptr.copy(), Q.indices.copy())
+        self.key = csc_pattern_key(Q.indptr, Q.indices)
         marks = sp.csc_array(
             (np.arange(1, Q.nnz + 1, dtype=float), Q.indices, Q.indptr), shape=Q.shape
         )
@@ -111,12 +112,7 @@ class Ordered:
         self.indices, self.indptr = permuted.indices, permuted.indptr
 
     def matches(self, Q: sp.csc_array) -> bool:
-        shape, indptr, indices = self.pattern
-        return bool(
-            Q.shape == shape
-            and np.array_equal(Q.indptr, indptr)
-            and np.array_equal(Q.indices, indices)
-        )
+        return csc_pattern_key(Q.indptr, Q.indices) == self.key
 
     def factor(self, Q: sp.csc_array) -> OrderedLU:
         B = sp.csc_array((Q.data[self.gather], self.indices, self.indptr), shape=Q.shape)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -288,14 +289,11 @@ def stability_map(
         raise ValueError("`speeds_rad_s` must be >= 0 and strictly increasing [rad/s]")
     t0 = time.perf_counter()
 
-    made: list[Any] = []
-
+    @functools.cache
     def template() -> Any:
         # assembled once, rescaled at every speed (the same system as ``model.assemble``,
         # a fifteenth of its cost on the gearbox)
-        if not made:
-            made.append(model.speed_template())
-        return made[0]
+        return model.speed_template()
 
     def truncation(system: Any) -> Any:
         if harmonics is None:
