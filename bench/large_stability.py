@@ -5,7 +5,7 @@ Rows, each a model at one speed: the assembly, the solve (``solve_point``, stabi
 the file's harmonics or ``--order``/``--max-order``) and the verdict (``rl.floquet`` of the
 assembled system, default options), wall and CPU seconds, the verdict's stages (the band's
 Arnoldi runs, the small-gain scans, the lattice search: the rest), the CPU ratio verdict /
-solve, the verdict, the band (modes, ``kappa_C``), the peak resident memory above the
+solve, the verdict, the band (modes, ``kappa_C`` and its norm), the peak resident memory above the
 process of the solve and of the verdict (blank stages: the dense method, below the band), and
 how the solve went (method, gmres strategy, iterations, harmonics). A verdict that raises
 (a model error, a memory refusal) is recorded in its row; the solve's figures stand.
@@ -90,7 +90,8 @@ def row(name: str, text: str, rpm: float, order: int | None, max_order: float | 
     line = solved + (
         f"{f_wall:.2f} / {f_cpu:.2f} | {arnoldi:.2f} | {scan:.2f} | {search:.2f} | "
         f"{f_cpu / max(s_cpu, 1e-9):.2f} | {verdict} | {res.max_real:.6g} | "
-        f"{band.get('modes', '-')} | {band.get('kappa', float('nan')):.3g} | "
+        f"{band.get('modes', '-')} | {band.get('kappa', float('nan')):.3g} "
+        f"{'(' + band['norm'] + ')' if 'norm' in band else ''} | "
         f"{s_peak:.0f} | {peak:.0f} | {how} |"
     )
     print(line, flush=True)

@@ -47,7 +47,7 @@ def test_a_new_pattern_is_ordered_anew(gearbox_hill: LatticeHill) -> None:
     hill = gearbox_hill
     si.factor(hill, complex(-300, 5000), hill.w)
     other = LatticeHill(hill.system, np.array([-437, 0, 437]))
-    assert not hill._ordered.matches(other.Q(0.5j))  # type: ignore[attr-defined]
+    assert not hill._ordered.ordered.matches(other.Q(0.5j))  # type: ignore[attr-defined]
     lu = si.factor(other, complex(-300, 5000), other.w)
     Q = other.Q(lu.sigma).toarray()
     b = np.ones(Q.shape[0], dtype=complex)

@@ -130,7 +130,11 @@ class BandAveraged(Averaged):
         c = self.complement
         if c is None or not np.isfinite(c.beta) or c.p.size != self.lam.size:
             return [float("inf")] * len(modes)
-        return [r + c.beta * float(c.p[int(m)]) for r, m in zip(base, modes, strict=True)]
+        rho = c.rho if c.rho.size == self.lam.size else np.ones(self.lam.size)
+        return [
+            (r + c.beta * float(c.p[int(m)])) * float(rho[int(m)])
+            for r, m in zip(base, modes, strict=True)
+        ]
 
 
 def _arpack(
@@ -299,14 +303,17 @@ def band_memory(system: PeriodicSystem, modes: int = BAND_MODES) -> int:
     ``K_0`` (at the lattice search's fill), the two Arnoldi bases, the band's vectors and the
     scan's factor and transfer blocks (dense up to
     :data:`~rheolin.floquet.complement.DENSE_TOUCHED` touched DOFs, else blocks of the band's
-    width: :class:`~rheolin.floquet.complement.Scan`)."""
+    width, and the energy norm's blocks of that width:
+    :class:`~rheolin.floquet.complement.Scan`)."""
     n = system.n
     K, D, M = _parts(system)
     nnz = int((abs(K) + abs(D) + abs(M)).nnz)
     ncv = min(2 * n, max(2 * modes + 9, 40))
     touched = touched_dofs(system).size
     dense = min(touched, DENSE_TOUCHED)
-    blocks = 4 * n * modes * 16 if touched > DENSE_TOUCHED else 0
+    # blocks of the band's width: the balanced norm's above DENSE_TOUCHED, the energy norm's
+    # responses of the band's vectors and their dual norms (complement.Scan) always
+    blocks = (4 if touched > DENSE_TOUCHED else 0) * n * modes * 16 + 6 * n * modes * 16
     scan = n * dense * 16 + nnz * LU_FILL * 16 + (2 * dense) ** 2 * 16 * 4 + blocks
     return int(
         nnz * LU_FILL * 16 + 2 * (2 * n) * ncv * 8 + band_vectors(system, modes) + scan + 32 * 2**20

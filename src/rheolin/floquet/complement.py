@@ -7,10 +7,12 @@ Two certificates make the band search (:mod:`rheolin.floquet.band`) complete:
   ``N`` the symmetric and skew parts of ``K_0``, ``D_s`` that of ``D_0``): two sparse
   factorizations (:func:`energy_certificate`);
 * the **small-gain bound**: no exponent with ``Re >= 0`` comes from the modes outside the band
-  when ``kappa_C(s) = sum_k ||H_C(s) E_k(s - i k w1)|| < 1`` on the imaginary axis, ``H_C`` the
-  time-averaged transfer function between the DOFs the time variation touches minus its band
-  part; a frequency scan (:class:`Scan`). It also gives ``beta*``, by which each band mode's
-  Gershgorin radius grows (the coupling through the modes left out).
+  when ``kappa_C(s) = sum_k ||G_C(s) E_k(s - i k w1)|| < 1`` on the imaginary axis, ``G_C``
+  the time-averaged transfer function minus its band part, in a fixed norm: the energy norm
+  (:func:`energy_weight`) or the Euclidean norm of the balanced state at the DOFs the time
+  variation touches, whichever bounds it better; a frequency scan (:class:`Scan`). It also
+  gives ``beta*``, by which each band mode's Gershgorin radius grows (the coupling through
+  the modes left out).
 
 >>> import numpy as np, rheolin as rl
 >>> s = rl.PeriodicSystem(1.0, M={0: np.eye(2)}, D={0: 0.1 * np.eye(2)},
@@ -29,6 +31,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..system.periodic import PeriodicSystem
+from .shift_invert import PatternLU
 
 __all__ = [
     "KAPPA_LIMIT",
@@ -46,11 +49,29 @@ KAPPA_LIMIT = 0.5
 #: Scan points per octave between the smallest and the largest frequency of the pencil.
 PER_OCTAVE = 3
 
-#: Power-iteration steps for a norm when the touched DOFs are too many for dense blocks.
+#: Power-iteration steps for a norm when the touched DOFs are too many for dense blocks (and
+#: where Lanczos does not converge, in the energy norm).
 NORM_STEPS = 12
 
 #: Touched DOFs up to this many are handled as dense blocks; above, by operators.
 DENSE_TOUCHED = 400
+
+#: The energy norm ``S = K_s + mu M_s`` starts from ``mu = (MU_FACTOR * radius)^2``, ``radius``
+#: the band's: the modes below it are weighed by their kinetic energy, those above by their
+#: strain energy (on the 2,610-DOF gearbox ``(1e4 rad/s)^2`` bounded the loop at 0.88 and
+#: ``(1e6 rad/s)^2`` at 1.13 where the band's radius, 8e4 rad/s, gave 0.68).
+MU_FACTOR = 1.0
+
+#: The band's part of the transfer function is taken with its ``1/s`` tail removed,
+#: ``x_j w_j^H (1/(s - lambda_j) - 1/(s - sigma))``, ``sigma = -SPLIT radius`` (the rest then
+#: decays as ``1/s^2``, as a second-order transfer function does; the band's Gershgorin radii
+#: grow by ``|lambda_j - sigma| / |sigma|``, within 1e-3 of 1 here).
+SPLIT = 30.0
+
+#: A coefficient harmonic touching up to this many DOFs has its loop gain in the energy norm
+#: exactly, from one block solve per point (a gear mesh's few DOFs); above, by Lanczos (a flat
+#: shaft).
+LOW_RANK = 96
 
 
 @dataclass
@@ -60,9 +81,10 @@ class Complement:
     ``certified``: the small-gain bound holds (else ``reason`` says what failed and what to
     change); ``energy``: the energy bound holds too (``energy_note`` says why not);
     ``kappa`` the scan's largest ``kappa_C`` (at ``at`` rad/s), ``beta`` the radius factor,
-    ``p`` per band mode its coupling into the touched DOFs (``R_j += beta p_j``), ``g_max``
-    the largest ``||G_C||`` seen (for the truncation estimate), ``radius`` the energy bound's
-    radius tested, ``points`` the frequencies scanned.
+    ``p`` per band mode its coupling into the modes left out and ``rho`` the factor of its
+    radius (``R_j = rho_j (R_j + beta p_j)``), ``norm`` the norm the loop was measured in
+    (``"energy"`` or ``"balanced"``), ``radius`` the energy bound's radius tested,
+    ``points`` the frequencies scanned.
     """
 
     certified: bool
@@ -73,10 +95,11 @@ class Complement:
     at: float = float("nan")
     beta: float = float("inf")
     radius: float = float("nan")
-    g_max: float = float("inf")
     points: int = 0
     complete: bool = True
     p: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    rho: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    norm: str = "balanced"
 
     def summary(self) -> dict[str, Any]:
         return {
@@ -89,6 +112,7 @@ class Complement:
             "beta": self.beta,
             "energy_radius": self.radius,
             "scan_points": self.points,
+            "norm": self.norm,
         }
 
 
@@ -217,6 +241,38 @@ def coarse_to_fine(count: int) -> np.ndarray:
     return np.asarray(order[np.argsort(level, kind="stable")])
 
 
+def energy_weight(system: PeriodicSystem, radius: float) -> tuple[sp.csc_array, Any] | None:
+    """The norm the small-gain loop is measured in: ``||x||_S^2 = x^H S x`` with
+    ``S = K_s + mu M_s`` (``K_s``, ``M_s`` the Hermitian parts of ``K_0``, ``M_0``),
+    ``mu = (MU_FACTOR radius)^2`` raised by decades until ``S`` is positive definite;
+    ``(S, a function solving with S)``, or None when no ``mu`` up to ``1e8`` times that makes
+    it so.
+
+    The modes below ``radius`` (the band's) are weighed by their kinetic energy at that
+    frequency, those above by their strain energy: the loop ``G_C(s) E_k`` of a shaft whose
+    stiffness or mass varies by a fraction ``eps`` of itself then has a gain of about
+    ``eps`` whatever the mesh, where in the Euclidean norm of the DOFs it grows with the
+    stiffness ratio of the mesh (docs/stability.md, 8.3)."""
+    M = _part(system, system.M)
+    K = _part(system, system.K)
+    Ks, Ms = ((X + X.conj().T) / 2 for X in (K, M))
+    if not (np.iscomplexobj(Ks.data) or np.iscomplexobj(Ms.data)):
+        Ks, Ms = Ks.real, Ms.real
+    mu = (MU_FACTOR * max(float(radius), 1e-300)) ** 2
+    for _ in range(9):
+        S = sp.csc_array(Ks + mu * Ms)
+        if _positive_definite(S):
+            lu = spla.splu(
+                S,
+                permc_spec="MMD_AT_PLUS_A",
+                diag_pivot_thresh=0.0,
+                options={"SymmetricMode": True},
+            )
+            return S, _solver(lu, np.iscomplexobj(S.data))
+        mu *= 10.0
+    return None
+
+
 class Scan:
     """The small-gain bound of the modes a band leaves out, on a frequency scan.
 
@@ -252,6 +308,50 @@ class Scan:
         self.Y = np.concatenate([band.X[T], band.X[n + T]])  # 2r x m (balanced)
         self.Wf = band.W[n + T]  # r x m
         self.rng = np.random.default_rng(31)
+        self._lu = PatternLU()  # Q0(i omega) at every point: one pattern
+        low = max(float(np.min(np.abs(band.lam), initial=self.w)), 1e-6 * self.w)
+        self.low = min(low, self.w) / 10
+        # the loop in the energy norm (energy_weight), where the band's unbalanced vectors,
+        # each harmonic's own touched DOFs and, for a few of them, (S^-1)_TT enter
+        self.Xq = band.X[:n] / band.sq[:, None]  # right vectors, displacements
+        self.Wv = band.W[n:] / band.sv[:, None]  # left vectors, force rows
+        self.XqH, self.WvH = (np.ascontiguousarray(x.conj().T) for x in (self.Xq, self.Wv))
+        radius = float(np.max(np.abs(band.lam), initial=self.w))
+        self.sigma = -SPLIT * radius
+        self.weight = energy_weight(system, radius)
+        self.parts: dict[int, tuple[Any, ...]] = {}
+        # harmonics touching few DOFs T_k (gear meshes): their blocks E_k[T_k, T_k] and
+        # C_k = J^T S^-1 J, with one set of responses G_C(s) J_U per point on the union U
+        self.low_rank: dict[int, tuple[np.ndarray, list[Any], np.ndarray]] = {}
+        self.union = np.zeros(0, dtype=np.int64)
+        if self.weight is None:
+            return
+        _, solve = self.weight
+        for k in system.coefficient_harmonics:
+            mats = [table.get(k) for table in (system.K, system.D, system.M)]
+            blocks = [None if x is None else sp.csr_array(x) for x in mats]
+            rows: list[np.ndarray] = [np.zeros(0, dtype=np.int64)]
+            for b in blocks:
+                if b is not None:
+                    coo = sp.coo_array(b)
+                    nz = coo.data != 0
+                    rows += [coo.row[nz].astype(np.int64), coo.col[nz].astype(np.int64)]
+            Tk = np.unique(np.concatenate(rows))
+            self.parts[k] = (Tk, *blocks)
+        few = [Tk for Tk, *_ in self.parts.values() if 0 < Tk.size <= LOW_RANK]
+        if not few:
+            return
+        U = np.unique(np.concatenate(few))
+        self.union = U
+        J = np.zeros((n, U.size))
+        J[U, np.arange(U.size)] = 1.0
+        CU = solve(J)[U]
+        for k, (Tk, *blocks) in self.parts.items():
+            if 0 < Tk.size <= LOW_RANK:
+                at = np.searchsorted(U, Tk)
+                small = [None if b is None else b[Tk][:, Tk].toarray() for b in blocks]
+                C = CU[np.ix_(at, at)]
+                self.low_rank[k] = (at, small, (C + C.conj().T) / 2)
 
     # ------------------------------------------------------------------ one frequency
     def coupling(self, k: int, s: complex) -> Any:
@@ -271,15 +371,75 @@ class Scan:
         Ev = (Z if D is None else D) + (Z if M is None else s * M)
         return sp.hstack([Eq, Ev]).tocsr()
 
-    def at(self, omega: float) -> tuple[float, float, float, Any]:
-        """``(kappa_C, q_S, ||G_C||, lu)`` at ``s = i omega``: the small-gain sum, the band
-        modes' coupling through the rest, the rest's second-order transfer norm (unbalanced)."""
+    def factor(self, omega: float) -> Any:
+        """The sparse LU of ``Q0(i omega)``, or None when it is singular."""
         s = 1j * float(omega)
         Q = sp.csc_array(self.K0 + s * self.D0 + (s * s) * self.M0)
         try:
-            lu = spla.splu(Q, permc_spec="MMD_AT_PLUS_A")
+            return self._lu(Q)
         except RuntimeError:
-            return float("inf"), float("inf"), float("inf"), None
+            return None
+
+    def _complement(self, lu: Any, s: complex) -> tuple[Any, Any]:
+        """``G_C(s)`` and its adjoint as functions of a force (``n``) or a block (``n x m``):
+        ``G(s)`` minus the band's ``x_j w_j^H (1/(s - lambda_j) - 1/(s - sigma))``,
+        ``sigma = -SPLIT * radius``."""
+        c = 1.0 / (s - self.band.lam) - 1.0 / (s - self.sigma)
+        Xq, Wv, XqH, WvH = self.Xq, self.Wv, self.XqH, self.WvH
+
+        def gc(F: np.ndarray) -> np.ndarray:
+            F = np.asarray(F, dtype=complex)
+            return np.asarray(lu.solve(F)) - Xq @ (c * (WvH @ F).T).T
+
+        def gc_h(Y: np.ndarray) -> np.ndarray:
+            Y = np.asarray(Y, dtype=complex)
+            return np.asarray(lu.solve(Y, trans="H")) - Wv @ (np.conj(c) * (XqH @ Y).T).T
+
+        return gc, gc_h
+
+    def _energy(self, lu: Any, s: complex) -> tuple[float, float]:
+        """``(kappa_C, q_S)`` at ``s`` in the energy norm: ``sum_k ||G_C(s) E_k(s - i k w1)||_S``
+        and ``sum_k sum_m ||G_C(s) E_k x_m||_S`` over the band's displacement vectors."""
+        assert self.weight is not None
+        S, solve = self.weight
+        gc, gc_h = self._complement(lu, s)
+        kappa = qs = 0.0
+        if self.low_rank:
+            # E_k = J E^_k J^T on T_k within U: ||G_C E_k||_S^2 is the largest eigenvalue of
+            # C_k E^H P E^ with P = (G_C J_U)^H S (G_C J_U) on T_k (C_k = J^T S^-1 J: the
+            # smallest energy of a state with given values on T_k); q_S from the same P
+            n, U = self.n, self.union
+            F = np.zeros((n, U.size))
+            F[U, np.arange(U.size)] = 1.0
+            GU = gc(F)
+            PU = GU.conj().T @ (S @ GU)
+        for k, (Tk, K, D, M) in self.parts.items():
+            if Tk.size == 0:
+                continue
+            sig = s - 1j * k * self.w
+            if k in self.low_rank:
+                at, (Kh, Dh, Mh), C = self.low_rank[k]
+                Eh = np.zeros((Tk.size, Tk.size), dtype=complex)
+                for part, factor in ((Kh, 1.0), (Dh, sig), (Mh, sig * sig)):
+                    if part is not None:
+                        Eh += factor * part
+                P = PU[np.ix_(at, at)]
+                ev = np.linalg.eigvals(C @ (Eh.conj().T @ P @ Eh))
+                kappa += float(np.sqrt(max(float(np.max(ev.real, initial=0.0)), 0.0)))
+                Y = Eh @ self.Xq[Tk]
+                energy = np.sum(Y.conj() * (P @ Y), axis=0).real
+            else:
+                E = _polynomial(K, D, M, sig, self.n)
+                kappa += _norm_s(lambda x, E=E: gc(E @ x), lambda y, E=E: E.conj().T @ gc_h(y),
+                                 S, solve, self.n, self.rng)  # fmt: skip
+                Z = gc(E @ self.Xq)
+                energy = np.sum(Z.conj() * (S @ Z), axis=0).real
+            qs += float(np.sum(np.sqrt(np.maximum(energy, 0.0))))
+        return kappa, qs
+
+    def _balanced(self, lu: Any, s: complex) -> tuple[float, float]:
+        """``(kappa_C, q_S)`` at ``s`` in the Euclidean norm of the balanced first-order state
+        at the touched DOFs, with the band's first-order part taken out."""
         band = self.band
         c = 1.0 / (s - band.lam)
         T, n, r = self.T, self.n, self.T.size
@@ -295,12 +455,11 @@ class Scan:
                 P = HC @ self.coupling(k, s - 1j * k * self.w)
                 kappa += float(np.linalg.norm(P, 2))
                 qs += float(np.sum(np.linalg.norm(P @ self.Y, axis=0)))
-            GC = HC[:r] / sq[:, None] / sv[None, :]
-            return kappa, qs, float(np.linalg.norm(GC, 2)), lu
+            return kappa, qs
         return self._operators(lu, s, c)
 
-    def _operators(self, lu: Any, s: complex, c: np.ndarray) -> tuple[float, float, float, Any]:
-        """:meth:`at` for many touched DOFs: the norms by power iteration."""
+    def _operators(self, lu: Any, s: complex, c: np.ndarray) -> tuple[float, float]:
+        """:meth:`_balanced` for many touched DOFs: the norms by power iteration."""
         T, n, r = self.T, self.n, self.T.size
         sq, sv, Y, Wf = self.sq, self.sv, self.Y, self.Wf
 
@@ -327,14 +486,7 @@ class Scan:
             )
             qs += float(np.sum(np.linalg.norm(hc(np.asarray(E @ Y)), axis=0)))
 
-        def gc(f: np.ndarray) -> np.ndarray:
-            return hc(f / sv * 1.0)[:r] / sq
-
-        def gc_h(y: np.ndarray) -> np.ndarray:
-            return hc_h(np.concatenate([y / sq, np.zeros(r)])) / sv
-
-        g = _norm2(gc, gc_h, r, self.rng)
-        return kappa, qs, g, lu
+        return kappa, qs
 
     def nearest(self, lu: Any, omega: float, steps: int = 5) -> complex:
         """The time-averaged eigenvalue nearest ``i omega`` (a few shift-invert steps with the
@@ -357,24 +509,60 @@ class Scan:
 
     # ------------------------------------------------------------------ the scan
     def run(self, top: float, stop: float = float("inf")) -> Complement:
-        """The scan from a tenth of the smallest band frequency to ``top`` rad/s, refined at
-        the eigenvalue nearest each point when its peak may be narrower than the grid.
+        """The small-gain bound in the energy norm and in the balanced state's norm (the
+        energy norm only where ``S`` is definite): each is a complete argument on its own,
+        and the one whose largest ``kappa_C`` is smaller is kept (``norm`` in the result).
+        Both are evaluated in one scan, sharing each point's factor (:meth:`scan`)."""
+        norms = ("energy", "balanced") if self.weight is not None else ("balanced",)
+        found = self.scan(top, stop, norms)
+        out = min(found.values(), key=lambda c: (not c.complete, c.kappa))
+        out.p = self._p() if out.norm == "energy" else self._p_balanced()
+        # the energy norm's band coordinates carry (lambda_j - sigma) / (s - sigma), at most
+        # |lambda_j - sigma| / |sigma| for Re s >= 0: each radius grows by that factor
+        out.rho = np.ones(self.band.lam.size)
+        if out.norm == "energy":
+            out.rho = np.maximum(np.abs(self.band.lam - self.sigma) / abs(self.sigma), 1.0)
+        return out
 
-        The grid is visited coarse to fine (every 16th point first, then those between) and
-        the scan ends at the first point where ``kappa_C >= stop``: the band is then known
-        to fail, and ``kappa`` reports that point's value (a lower bound of the largest)."""
+    def scan(self, top: float, stop: float, norms: tuple[str, ...]) -> dict[str, Complement]:
+        """The scan from a tenth of the smallest band frequency to ``top`` rad/s (and one
+        quasi-static point at a tenth of ``w1`` when that is lower) in each of
+        ``norms`` (``"energy"``, ``"balanced"``), refined at the eigenvalue nearest each point
+        when its peak may be narrower than the grid.
+
+        The grid is visited coarse to fine (every 16th point first, then those between); a
+        norm drops out at the first point where its ``kappa_C >= stop`` (the band is then
+        known to fail in it, and its ``kappa`` reports that point's value, a lower bound of
+        the largest), and the scan ends when none is left."""
         band = self.band
-        low = max(float(np.min(np.abs(band.lam), initial=self.w)), 1e-6 * self.w)
-        low = min(low, self.w) / 10
+        measures = {"energy": self._energy, "balanced": self._balanced}
+        # below a tenth of the lowest band frequency the loop is quasi-static: one point at
+        # the lowest frequency stands for it (a tenth of the fundamental w1, when lower)
+        lowest = float(np.min(np.abs(band.lam), initial=np.inf))
+        low = max(lowest if np.isfinite(lowest) else self.w, 1e-6 * self.w) / 10
         count = max(int(np.ceil(PER_OCTAVE * np.log2(max(top / low, 2.0)))), 2)
         grid = np.geomspace(low, top, count)
+        if self.low < low / 2:
+            grid, count = np.concatenate([[self.low], grid]), count + 1
         spacing = 2.0 ** (1.0 / PER_OCTAVE) - 1.0
-        seen: list[tuple[float, float, float, float]] = []
+        seen: dict[str, list[tuple[float, float, float]]] = {m: [] for m in norms}
+        alive = set(norms)
         extra: list[float] = []
+
+        def visit(omega: float) -> Any:
+            lu = self.factor(omega)
+            for name in norms:
+                if name in alive:
+                    inf = float("inf")
+                    kap, qs = (inf, inf) if lu is None else measures[name](lu, 1j * float(omega))
+                    seen[name].append((omega, kap, qs))
+                    if not kap < stop:
+                        alive.discard(name)
+            return lu
+
         for omega in grid[coarse_to_fine(count)]:
-            kap, qs, g, lu = self.at(omega)
-            seen.append((omega, kap, qs, g))
-            if not kap < stop:
+            lu = visit(omega)
+            if not alive:
                 break
             if lu is None:
                 continue
@@ -386,24 +574,50 @@ class Scan:
                 extra.append(float(mu.imag))
         else:
             for omega in sorted(set(np.round(extra, 9))):
-                kap, qs, g, _ = self.at(omega)
-                seen.append((omega, kap, qs, g))
-                if not kap < stop:
+                visit(omega)
+                if not alive:
                     break
-        arr = np.array(seen)
-        kappa = arr[:, 1]
+        return {name: self._result(name, np.array(seen[name]), name in alive) for name in norms}
+
+    def _result(self, norm: str, arr: np.ndarray, complete: bool) -> Complement:
+        """The :class:`Complement` of one norm's scan (rows ``omega, kappa_C, q_S``), without
+        the band modes' couplings (:meth:`run` adds them for the norm it keeps)."""
+        kappa, qs = arr[:, 1], arr[:, 2]
         i = int(np.argmax(kappa))
         out = Complement(
-            certified=False,
-            kappa=float(kappa[i]),
-            at=float(arr[i, 0]),
-            g_max=float(np.max(arr[:, 3])),
-            points=len(seen),
+            certified=False, kappa=float(kappa[i]), at=float(arr[i, 0]), points=len(arr)
         )
-        out.complete = not kappa[-1] >= stop
-        if out.complete and np.all(kappa < 1.0):
-            out.beta = float(np.max(arr[:, 2] / (1.0 - kappa)))
-        # each band mode's coupling into the touched DOFs' forces: ||w_j^H J E_k|| summed
+        out.norm, out.complete = norm, complete
+        if complete and np.all(kappa < 1.0):
+            out.beta = float(np.max(qs / (1.0 - kappa)))
+        return out
+
+    def _p(self) -> np.ndarray:
+        """Each band mode's coupling into the forces, in the dual of the energy norm:
+        ``sum_k ||S^-1/2 E_k(s_j)^H w_j||`` with ``s_j = lambda_j - i k w1``."""
+        assert self.weight is not None
+        _, solve = self.weight
+        band, Wv = self.band, self.Wv
+        p = np.zeros(band.lam.size)
+        for k, (Tk, K, D, M) in self.parts.items():
+            if Tk.size == 0:
+                continue
+            sj = np.conj(band.lam - 1j * k * self.w)
+            F = np.zeros_like(Wv)
+            if K is not None:
+                F += K.conj().T @ Wv
+            if D is not None:
+                F += (D.conj().T @ Wv) * sj
+            if M is not None:
+                F += (M.conj().T @ Wv) * sj**2
+            Z = solve(F)
+            p += np.sqrt(np.maximum(np.sum(F.conj() * Z, axis=0).real, 0.0))
+        return p
+
+    def _p_balanced(self) -> np.ndarray:
+        """Each band mode's coupling into the touched DOFs' forces: ``||w_j^H J E_k||``
+        summed (the balanced state's norm)."""
+        band = self.band
         Wf = self.Wf
         p = np.zeros(band.lam.size)
         WfH = Wf.conj().T
@@ -414,5 +628,62 @@ class Scan:
             rows_q = 0.0 if Kp is None else np.abs(Kp) ** 2
             rows_v = (0.0 if Dp is None else Dp) + (0.0 if Mp is None else sj * Mp)
             p += np.sqrt(np.sum(rows_q + np.abs(rows_v) ** 2, axis=1))
-        out.p = p
-        return out
+        return p
+
+
+def _polynomial(K: Any, D: Any, M: Any, sig: complex, n: int) -> sp.csc_array:
+    """``K + sig D + sig^2 M`` (absent parts are zero), sparse."""
+    out = sp.csc_array((n, n), dtype=complex)
+    if K is not None:
+        out = out + K
+    if D is not None:
+        out = out + sig * D
+    if M is not None:
+        out = out + (sig * sig) * M
+    return sp.csc_array(out)
+
+
+def _solver(lu: Any, complex_factor: bool) -> Any:
+    """``b -> lu.solve(b)``, complex right-hand sides included with a real factor."""
+
+    def solve(b: np.ndarray) -> np.ndarray:
+        if np.iscomplexobj(b) and not complex_factor:
+            re = np.asarray(lu.solve(np.ascontiguousarray(b.real)))
+            return re + 1j * np.asarray(lu.solve(np.ascontiguousarray(b.imag)))
+        return np.asarray(lu.solve(b))
+
+    return solve
+
+
+def _norm_s(
+    apply: Any, adjoint: Any, S: Any, solve: Any, dim: int, rng: np.random.Generator
+) -> float:
+    """The norm of an operator in ``||x||_S = sqrt(x^H S x)``: the largest eigenvalue of
+    ``A^H S A x = mu S x`` by Lanczos (ARPACK, relative tolerance 1e-6), square-rooted. Where
+    ARPACK does not converge, the power iteration's estimate (from below) times 1.05."""
+    A = spla.LinearOperator((dim, dim), matvec=lambda x: adjoint(S @ apply(x)), dtype=complex)
+    Sop = spla.LinearOperator((dim, dim), matvec=lambda x: S @ x, dtype=complex)
+    Sinv = spla.LinearOperator((dim, dim), matvec=solve, dtype=complex)
+    v0 = rng.standard_normal(dim) + 1j * rng.standard_normal(dim)
+    try:
+        mu = spla.eigsh(
+            A, k=1, M=Sop, Minv=Sinv, which="LA", tol=1e-6, v0=v0, ncv=min(dim, 16),
+            maxiter=40, return_eigenvectors=False,
+        )  # fmt: skip
+        return float(np.sqrt(max(float(mu[-1]), 0.0)))
+    except spla.ArpackNoConvergence:
+        pass
+    x = v0 / np.sqrt(abs(np.vdot(v0, S @ v0)))
+    value = 0.0
+    for _ in range(NORM_STEPS):
+        y = apply(x)
+        value_new = float(np.sqrt(abs(np.vdot(y, S @ y))))
+        z = solve(adjoint(S @ y))
+        nz = float(np.sqrt(abs(np.vdot(z, S @ z))))
+        if nz == 0 or value_new == 0:
+            return value_new
+        x = z / nz
+        if abs(value_new - value) <= 1e-3 * value_new:
+            break
+        value = value_new
+    return 1.05 * value_new

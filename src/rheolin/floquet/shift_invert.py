@@ -133,15 +133,26 @@ class OrderedLU:
         return x
 
 
+class PatternLU:
+    """SuperLU factors of matrices that share one pattern: the first with minimum degree,
+    the next ones in its ordering (:class:`Ordered`)."""
+
+    def __init__(self) -> None:
+        self.ordered: Ordered | None = None
+
+    def __call__(self, Q: sp.csc_array) -> Any:
+        if self.ordered is not None and self.ordered.matches(Q):
+            return self.ordered.factor(Q)
+        lu = spla.splu(Q, **SPLU)
+        self.ordered = Ordered(Q, lu.perm_c)
+        return lu
+
+
 def superlu(hill: LatticeHill, Q: sp.csc_array) -> Any:
-    """SuperLU of ``Q`` on ``hill``'s lattice: the first with minimum degree, the next ones
-    in its ordering (:class:`Ordered`)."""
-    known = hill._ordered
-    if known is not None and known.matches(Q):
-        return known.factor(Q)
-    lu = spla.splu(Q, **SPLU)
-    hill._ordered = Ordered(Q, lu.perm_c)
-    return lu
+    """SuperLU of ``Q`` on ``hill``'s lattice (:class:`PatternLU`, kept with the lattice)."""
+    if hill._ordered is None:
+        hill._ordered = PatternLU()
+    return hill._ordered(Q)
 
 
 class Shifted:

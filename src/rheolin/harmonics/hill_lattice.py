@@ -177,7 +177,7 @@ class LatticeHill:
         self.inner = _Coupling(self.blocks, self.H, self.H, self.n)
         self._outer: tuple[np.ndarray, _Coupling, _Coupling] | None = None
         self._pardiso: tuple[tuple[int, int, int], Any] | None = None
-        self._ordered: Any = None  # the SuperLU ordering of Q's pattern (shift_invert)
+        self._ordered: Any = None  # SuperLU factors in one ordering (shift_invert.PatternLU)
         self.size = self.H.size * self.n
 
     # ------------------------------------------------------------------ inside

@@ -1,0 +1,144 @@
+"""The small-gain bound of a band's modes left out, in the energy norm (docs/stability.md, 8.3).
+
+References, each independent of the code under test:
+
+* the dense decomposition of the time-averaged pencil (every mode, QZ): the transfer function
+  of the modes left out is the sum over them, and its loop gain in the energy norm is a dense
+  matrix norm through a Cholesky factor of ``S``;
+* the dense lattice method (every mode) on the same gearbox: the verdict and the exponents
+  that the band method decides in the energy norm, where the balanced norm cannot.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+import numpy as np
+import pytest
+import scipy.linalg as sla
+
+import rheolin as rl
+from rheolin.data import example_text
+from rheolin.floquet.averaged import Averaged
+from rheolin.floquet.band import BandAveraged, _top_frequency, certify
+from rheolin.floquet.complement import Scan
+from rheolin.io import parse_model
+
+RPM = np.pi / 30
+
+
+@pytest.fixture(scope="module")
+def gearbox() -> rl.PeriodicSystem:
+    """The example gearbox (126 DOF) at 3000 rpm, in the inertial frame: its intermediate
+    shaft has a flat and carries two gears, so its stiffness varies on all its DOFs."""
+    model = parse_model(example_text("gearbox")).model
+    return model.assemble(3000 * RPM).system
+
+
+def _dense(x) -> np.ndarray:
+    return np.asarray(x.toarray() if hasattr(x, "toarray") else x)
+
+
+def _left_out(system: rl.PeriodicSystem, band: BandAveraged, sigma: float):
+    """``G_C(s)`` as the sum over the time-averaged modes outside the band (dense QZ):
+    ``x_j w_j^H (1/(s - lambda_j) - 1/(s - sigma))``."""
+    avg = Averaged(system)
+    n = system.n
+    outside = np.array([np.min(np.abs(band.lam - z)) > 1e-7 * abs(z) for z in avg.lam], dtype=bool)
+    assert outside.sum() == avg.lam.size - band.lam.size
+    Xq = (avg.X[:n] / avg.sq[:, None])[:, outside]
+    Wv = (avg.W[n:] / avg.sv[:, None])[:, outside]
+    lam = avg.lam[outside]
+
+    def G_C(s: complex) -> np.ndarray:
+        return (Xq * (1 / (s - lam) - 1 / (s - sigma))) @ Wv.conj().T
+
+    return G_C
+
+
+def test_complement_is_the_sum_over_the_modes_left_out(gearbox) -> None:
+    """The scan's ``G_C(s)`` (a sparse LU of ``Q0(s)`` minus the band's part) equals the sum over
+    the modes left out, in and off the right half-plane, and decays as ``1/s^2`` as a
+    second-order transfer function does (the band's ``1/s`` tail is split off)."""
+    band = BandAveraged(gearbox, 40)
+    scan = Scan(gearbox, band)
+    reference = _left_out(gearbox, band, scan.sigma)
+    rng = np.random.default_rng(3)
+    F = rng.standard_normal((gearbox.n, 3))
+    for s in (0.02j, 3.1e3j, 50.0 + 2.2e4j, 9e5j):
+        gc, gc_h = scan._complement(scan.factor(abs(s)) if s.real == 0 else _lu(scan, s), s)
+        G = reference(s)
+        assert np.allclose(gc(F), G @ F, rtol=1e-7, atol=1e-9 * np.abs(G @ F).max())
+        assert np.allclose(gc_h(F), G.conj().T @ F, rtol=1e-7, atol=1e-9 * np.abs(G).max())
+    high = [np.linalg.norm(reference(1j * w), 2) for w in (1e7, 1e8)]
+    assert high[0] / high[1] == pytest.approx(100.0, rel=0.05)
+
+
+def _lu(scan: Scan, s: complex):
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
+    return spla.splu(sp.csc_array(scan.K0 + s * scan.D0 + s * s * scan.M0))
+
+
+@pytest.mark.parametrize("low_rank", [96, 0])
+def test_loop_gain_in_the_energy_norm_matches_the_dense_norm(
+    gearbox, monkeypatch, low_rank
+) -> None:
+    """``kappa_C(s) = sum_k ||G_C(s) E_k(s - i k w1)||_S`` from the scan (exact low-rank
+    blocks for the harmonics that touch few DOFs, power iteration for the others: both ways
+    for every harmonic) against the dense operator norms ``||L^H G_C E_k L^-H||_2``,
+    ``S = L L^H``. The values span 0.26 to 0.67 here."""
+    monkeypatch.setattr(importlib.import_module("rheolin.floquet.complement"), "LOW_RANK", low_rank)
+    band = BandAveraged(gearbox, 80)
+    scan = Scan(gearbox, band)
+    assert scan.weight is not None
+    S = _dense(scan.weight[0])
+    L = np.linalg.cholesky(S)
+    reference = _left_out(gearbox, band, scan.sigma)
+    w = gearbox.omega
+    parts = {k: [_dense(t.get(k, np.zeros((gearbox.n,) * 2))) for t in (gearbox.K, gearbox.D,
+                                                                        gearbox.M)]
+             for k in gearbox.coefficient_harmonics}  # fmt: skip
+    for omega in (0.5, 2.0e3, 1.2e5, 3.0e7):
+        s = 1j * omega
+        G = reference(s)
+        dense = 0.0
+        for k, (K, D, M) in parts.items():
+            sk = s - 1j * k * w
+            A = G @ (K + sk * D + sk * sk * M)
+            dense += np.linalg.norm(L.conj().T @ sla.solve_triangular(L, A.T, lower=True).T, 2)
+        kappa, _ = scan._energy(scan.factor(omega), s)
+        print(omega, kappa, dense)
+        assert kappa == pytest.approx(dense, rel=1e-5 if low_rank == 0 else 1e-7), omega
+
+
+def test_band_decided_in_the_energy_norm_matches_the_dense_method(gearbox) -> None:
+    """The gearbox with 80 of its 252 time-averaged modes: in the balanced state's norm the
+    modes left out cannot be bounded (``kappa_C >= 1``), in the energy norm they are; the band
+    method then decides, with the dense method's verdict and leading exponent (every mode)."""
+    band = BandAveraged(gearbox, 80)
+    scan = Scan(gearbox, band)
+    top = _top_frequency(gearbox, band)
+    assert scan.scan(top, 1.0, ("balanced",))["balanced"].kappa >= 1.0
+    energy = certify(gearbox, band)
+    assert energy.certified and energy.norm == "energy" and energy.kappa < 1.0
+
+    dense = rl.floquet(gearbox)
+    res = rl.floquet(gearbox, band=80)
+    assert res.info["band"]["norm"] == "energy" and res.info["band"]["certified"]
+    assert dense.decided and res.decided and res.stable is dense.stable
+    assert abs(res.max_real - dense.max_real) <= res.max_real_uncertainty + 1e-6 * abs(
+        dense.max_real
+    )
+    # every exponent the band method reports is one of the dense method's, or lies in the
+    # disc of a cluster the dense method certified without computing it
+    w = gearbox.omega
+    skipped = dense.info["certified_modes"]
+    radii = dense.info["certified_radii"]
+    for z, u in zip(res.exponents, res.info["uncertainty"] + res.tolerances, strict=True):
+        gap = np.abs(dense.exponents.real - z.real) + np.abs(
+            (dense.exponents.imag - z.imag + w / 2) % w - w / 2
+        )
+        inside = np.any(np.abs(z - skipped) <= radii) or np.any(np.abs(z - skipped.conj()) <= radii)
+        assert gap.min() <= 2 * u + 1e-9 * max(abs(z), w) or inside, z
