@@ -9,10 +9,10 @@ Two certificates make the band search (:mod:`rheolin.floquet.band`) complete:
 * the **small-gain bound**: no exponent with ``Re >= 0`` comes from the modes outside the band
   when ``kappa_C(s) = sum_k ||G_C(s) E_k(s - i k w1)|| < 1`` on the imaginary axis, ``G_C``
   the time-averaged transfer function minus its band part, in a fixed norm: the energy norm
-  (:func:`energy_weight`) or the Euclidean norm of the balanced state at the DOFs the time
-  variation touches, whichever bounds it better; a frequency scan (:class:`Scan`). It also
-  gives ``beta*``, by which each band mode's Gershgorin radius grows (the coupling through
-  the modes left out).
+  (:mod:`rheolin.floquet.energy_norm`) or the Euclidean norm of the balanced state at the
+  DOFs the time variation touches, whichever bounds it better; a frequency scan
+  (:class:`Scan`). It also gives ``beta*``, by which each band mode's Gershgorin radius grows
+  (the coupling through the modes left out).
 
 >>> import numpy as np, rheolin as rl
 >>> s = rl.PeriodicSystem(1.0, M={0: np.eye(2)}, D={0: 0.1 * np.eye(2)},
@@ -28,9 +28,9 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from ..system.periodic import PeriodicSystem
+from .energy_norm import energy_weight, norm_in, positive_definite
 from .shift_invert import PatternLU
 
 __all__ = [
@@ -49,18 +49,11 @@ KAPPA_LIMIT = 0.5
 #: Scan points per octave between the smallest and the largest frequency of the pencil.
 PER_OCTAVE = 3
 
-#: Power-iteration steps for a norm when the touched DOFs are too many for dense blocks (and
-#: where Lanczos does not converge, in the energy norm).
+#: Power-iteration steps for a norm when the touched DOFs are too many for dense blocks.
 NORM_STEPS = 12
 
 #: Touched DOFs up to this many are handled as dense blocks; above, by operators.
 DENSE_TOUCHED = 400
-
-#: The energy norm ``S = K_s + mu M_s`` starts from ``mu = (MU_FACTOR * radius)^2``, ``radius``
-#: the band's: the modes below it are weighed by their kinetic energy, those above by their
-#: strain energy (on the 2,610-DOF gearbox ``(1e4 rad/s)^2`` bounded the loop at 0.88 and
-#: ``(1e6 rad/s)^2`` at 1.13 where the band's radius, 8e4 rad/s, gave 0.68).
-MU_FACTOR = 1.0
 
 #: The band's part of the transfer function is taken with its ``1/s`` tail removed,
 #: ``x_j w_j^H (1/(s - lambda_j) - 1/(s - sigma))``, ``sigma = -SPLIT radius`` (the rest then
@@ -119,39 +112,26 @@ class Complement:
 def touched_dofs(system: PeriodicSystem) -> np.ndarray:
     """The DOFs the time variation touches: rows and columns of every ``K_k, D_k, M_k``,
     ``k != 0``."""
+    return _nonzero_dofs(
+        x for table in (system.K, system.D, system.M) for k, x in table.items() if k != 0
+    )
+
+
+def _nonzero_dofs(matrices: Any) -> np.ndarray:
+    """The rows and columns of the nonzero entries of ``matrices`` (None entries skipped)."""
     out: list[np.ndarray] = [np.zeros(0, dtype=np.int64)]
-    for table in (system.K, system.D, system.M):
-        for k, x in table.items():
-            if k == 0:
-                continue
-            coo = sp.coo_array(x)
-            nz = coo.data != 0
-            out += [coo.row[nz].astype(np.int64), coo.col[nz].astype(np.int64)]
+    for x in matrices:
+        if x is None:
+            continue
+        coo = sp.coo_array(x)
+        nz = coo.data != 0
+        out += [coo.row[nz].astype(np.int64), coo.col[nz].astype(np.int64)]
     return np.unique(np.concatenate(out))
 
 
 def _part(system: PeriodicSystem, table: dict) -> sp.csc_array:
     x = table.get(0)
     return sp.csc_array((system.n, system.n)) if x is None else sp.csc_array(x)
-
-
-def _positive_definite(A: Any) -> bool:
-    """True when the Hermitian sparse ``A`` is positive definite: a factorization with
-    symmetric (diagonal) pivots whose pivots are all positive (Sylvester's law of inertia)."""
-    A = sp.csc_array(A)
-    try:
-        lu = spla.splu(
-            A,
-            permc_spec="MMD_AT_PLUS_A",
-            diag_pivot_thresh=0.0,
-            options={"SymmetricMode": True},
-        )
-    except RuntimeError:  # exactly singular
-        return False
-    if not np.array_equal(lu.perm_r, lu.perm_c):
-        return False  # an off-diagonal pivot: not the LDL^H of a definite matrix
-    d = lu.U.diagonal()
-    return bool(np.all(d.real > 0) and np.all(np.abs(d.imag) <= 1e-10 * np.abs(d.real)))
 
 
 def energy_certificate(system: PeriodicSystem, radius: float) -> tuple[bool, str]:
@@ -162,7 +142,7 @@ def energy_certificate(system: PeriodicSystem, radius: float) -> tuple[bool, str
     M, D, K = (_part(system, t) for t in (system.M, system.D, system.K))
     Ks, N = (K + K.T) / 2, (K - K.T) / 2
     Ds = (D + D.T) / 2
-    ok_k = _positive_definite(Ks + radius * radius * M)
+    ok_k = positive_definite(Ks + radius * radius * M)
     if not ok_k:
         return False, (
             f"K_s + r^2 M is not positive definite at r = {radius:.4g} rad/s: the "
@@ -173,12 +153,12 @@ def energy_certificate(system: PeriodicSystem, radius: float) -> tuple[bool, str
     eps = 1e-9 * max(float(np.abs(Ds.diagonal()).max(initial=0.0)), 1e-300)
     skew = abs(N).max() if N.nnz else 0.0
     if skew == 0.0:
-        ok_d = _positive_definite(Ds + eps * sp.identity(system.n, format="csc"))
+        ok_d = positive_definite(Ds + eps * sp.identity(system.n, format="csc"))
     else:
         if radius <= 0:
             return False, "circulatory stiffness terms and no band to bound them"
         shifted = Ds.astype(complex) - 1j * N / radius + eps * sp.identity(system.n, format="csc")
-        ok_d = _positive_definite(shifted)
+        ok_d = positive_definite(shifted)
     if not ok_d:
         return False, (
             f"D_s - i N / r is not positive semidefinite at r = {radius:.4g} rad/s: "
@@ -241,38 +221,6 @@ def coarse_to_fine(count: int) -> np.ndarray:
     return np.asarray(order[np.argsort(level, kind="stable")])
 
 
-def energy_weight(system: PeriodicSystem, radius: float) -> tuple[sp.csc_array, Any] | None:
-    """The norm the small-gain loop is measured in: ``||x||_S^2 = x^H S x`` with
-    ``S = K_s + mu M_s`` (``K_s``, ``M_s`` the Hermitian parts of ``K_0``, ``M_0``),
-    ``mu = (MU_FACTOR radius)^2`` raised by decades until ``S`` is positive definite;
-    ``(S, a function solving with S)``, or None when no ``mu`` up to ``1e8`` times that makes
-    it so.
-
-    The modes below ``radius`` (the band's) are weighed by their kinetic energy at that
-    frequency, those above by their strain energy: the loop ``G_C(s) E_k`` of a shaft whose
-    stiffness or mass varies by a fraction ``eps`` of itself then has a gain of about
-    ``eps`` whatever the mesh, where in the Euclidean norm of the DOFs it grows with the
-    stiffness ratio of the mesh (docs/stability.md, 8.3)."""
-    M = _part(system, system.M)
-    K = _part(system, system.K)
-    Ks, Ms = ((X + X.conj().T) / 2 for X in (K, M))
-    if not (np.iscomplexobj(Ks.data) or np.iscomplexobj(Ms.data)):
-        Ks, Ms = Ks.real, Ms.real
-    mu = (MU_FACTOR * max(float(radius), 1e-300)) ** 2
-    for _ in range(9):
-        S = sp.csc_array(Ks + mu * Ms)
-        if _positive_definite(S):
-            lu = spla.splu(
-                S,
-                permc_spec="MMD_AT_PLUS_A",
-                diag_pivot_thresh=0.0,
-                options={"SymmetricMode": True},
-            )
-            return S, _solver(lu, np.iscomplexobj(S.data))
-        mu *= 10.0
-    return None
-
-
 class Scan:
     """The small-gain bound of the modes a band leaves out, on a frequency scan.
 
@@ -311,41 +259,33 @@ class Scan:
         self._lu = PatternLU()  # Q0(i omega) at every point: one pattern
         low = max(float(np.min(np.abs(band.lam), initial=self.w)), 1e-6 * self.w)
         self.low = min(low, self.w) / 10
-        # the loop in the energy norm (energy_weight), where the band's unbalanced vectors,
-        # each harmonic's own touched DOFs and, for a few of them, (S^-1)_TT enter
+        # the loop in the energy norm: the band's unbalanced vectors, each harmonic's own
+        # touched DOFs and, for a few of them, (S^-1)_TT
         self.Xq = band.X[:n] / band.sq[:, None]  # right vectors, displacements
         self.Wv = band.W[n:] / band.sv[:, None]  # left vectors, force rows
         self.XqH, self.WvH = (np.ascontiguousarray(x.conj().T) for x in (self.Xq, self.Wv))
         radius = float(np.max(np.abs(band.lam), initial=self.w))
         self.sigma = -SPLIT * radius
-        self.weight = energy_weight(system, radius)
+        self.weight = energy_weight(self.K0, self.M0, radius)
         self.parts: dict[int, tuple[Any, ...]] = {}
         # harmonics touching few DOFs T_k (gear meshes): their blocks E_k[T_k, T_k] and
         # C_k = J^T S^-1 J, with one set of responses G_C(s) J_U per point on the union U
         self.low_rank: dict[int, tuple[np.ndarray, list[Any], np.ndarray]] = {}
-        self.union = np.zeros(0, dtype=np.int64)
+        self.JU = np.zeros((n, 0))  # unit forces on the union U of those T_k
         if self.weight is None:
             return
         _, solve = self.weight
         for k in system.coefficient_harmonics:
             mats = [table.get(k) for table in (system.K, system.D, system.M)]
             blocks = [None if x is None else sp.csr_array(x) for x in mats]
-            rows: list[np.ndarray] = [np.zeros(0, dtype=np.int64)]
-            for b in blocks:
-                if b is not None:
-                    coo = sp.coo_array(b)
-                    nz = coo.data != 0
-                    rows += [coo.row[nz].astype(np.int64), coo.col[nz].astype(np.int64)]
-            Tk = np.unique(np.concatenate(rows))
-            self.parts[k] = (Tk, *blocks)
+            self.parts[k] = (_nonzero_dofs(blocks), *blocks)
         few = [Tk for Tk, *_ in self.parts.values() if 0 < Tk.size <= LOW_RANK]
         if not few:
             return
         U = np.unique(np.concatenate(few))
-        self.union = U
-        J = np.zeros((n, U.size))
-        J[U, np.arange(U.size)] = 1.0
-        CU = solve(J)[U]
+        self.JU = np.zeros((n, U.size))
+        self.JU[U, np.arange(U.size)] = 1.0
+        CU = solve(self.JU)[U]
         for k, (Tk, *blocks) in self.parts.items():
             if 0 < Tk.size <= LOW_RANK:
                 at = np.searchsorted(U, Tk)
@@ -408,10 +348,7 @@ class Scan:
             # E_k = J E^_k J^T on T_k within U: ||G_C E_k||_S^2 is the largest eigenvalue of
             # C_k E^H P E^ with P = (G_C J_U)^H S (G_C J_U) on T_k (C_k = J^T S^-1 J: the
             # smallest energy of a state with given values on T_k); q_S from the same P
-            n, U = self.n, self.union
-            F = np.zeros((n, U.size))
-            F[U, np.arange(U.size)] = 1.0
-            GU = gc(F)
+            GU = gc(self.JU)
             PU = GU.conj().T @ (S @ GU)
         for k, (Tk, K, D, M) in self.parts.items():
             if Tk.size == 0:
@@ -430,7 +367,7 @@ class Scan:
                 energy = np.sum(Y.conj() * (P @ Y), axis=0).real
             else:
                 E = _polynomial(K, D, M, sig, self.n)
-                kappa += _norm_s(lambda x, E=E: gc(E @ x), lambda y, E=E: E.conj().T @ gc_h(y),
+                kappa += norm_in(lambda x, E=E: gc(E @ x), lambda y, E=E: E.conj().T @ gc_h(y),
                                  S, solve, self.n, self.rng)  # fmt: skip
                 Z = gc(E @ self.Xq)
                 energy = np.sum(Z.conj() * (S @ Z), axis=0).real
@@ -641,49 +578,3 @@ def _polynomial(K: Any, D: Any, M: Any, sig: complex, n: int) -> sp.csc_array:
     if M is not None:
         out = out + (sig * sig) * M
     return sp.csc_array(out)
-
-
-def _solver(lu: Any, complex_factor: bool) -> Any:
-    """``b -> lu.solve(b)``, complex right-hand sides included with a real factor."""
-
-    def solve(b: np.ndarray) -> np.ndarray:
-        if np.iscomplexobj(b) and not complex_factor:
-            re = np.asarray(lu.solve(np.ascontiguousarray(b.real)))
-            return re + 1j * np.asarray(lu.solve(np.ascontiguousarray(b.imag)))
-        return np.asarray(lu.solve(b))
-
-    return solve
-
-
-def _norm_s(
-    apply: Any, adjoint: Any, S: Any, solve: Any, dim: int, rng: np.random.Generator
-) -> float:
-    """The norm of an operator in ``||x||_S = sqrt(x^H S x)``: the largest eigenvalue of
-    ``A^H S A x = mu S x`` by Lanczos (ARPACK, relative tolerance 1e-6), square-rooted. Where
-    ARPACK does not converge, the power iteration's estimate (from below) times 1.05."""
-    A = spla.LinearOperator((dim, dim), matvec=lambda x: adjoint(S @ apply(x)), dtype=complex)
-    Sop = spla.LinearOperator((dim, dim), matvec=lambda x: S @ x, dtype=complex)
-    Sinv = spla.LinearOperator((dim, dim), matvec=solve, dtype=complex)
-    v0 = rng.standard_normal(dim) + 1j * rng.standard_normal(dim)
-    try:
-        mu = spla.eigsh(
-            A, k=1, M=Sop, Minv=Sinv, which="LA", tol=1e-6, v0=v0, ncv=min(dim, 16),
-            maxiter=40, return_eigenvectors=False,
-        )  # fmt: skip
-        return float(np.sqrt(max(float(mu[-1]), 0.0)))
-    except spla.ArpackNoConvergence:
-        pass
-    x = v0 / np.sqrt(abs(np.vdot(v0, S @ v0)))
-    value = 0.0
-    for _ in range(NORM_STEPS):
-        y = apply(x)
-        value_new = float(np.sqrt(abs(np.vdot(y, S @ y))))
-        z = solve(adjoint(S @ y))
-        nz = float(np.sqrt(abs(np.vdot(z, S @ z))))
-        if nz == 0 or value_new == 0:
-            return value_new
-        x = z / nz
-        if abs(value_new - value) <= 1e-3 * value_new:
-            break
-        value = value_new
-    return 1.05 * value_new
