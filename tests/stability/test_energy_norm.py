@@ -142,3 +142,34 @@ def test_band_decided_in_the_energy_norm_matches_the_dense_method(gearbox) -> No
         )
         inside = np.any(np.abs(z - skipped) <= radii) or np.any(np.abs(z - skipped.conj()) <= radii)
         assert gap.min() <= 2 * u + 1e-9 * max(abs(z), w) or inside, z
+
+
+def test_band_grows_past_a_failure_after_a_near_miss(monkeypatch) -> None:
+    """The gearbox in its 96,888-DOF housing with fine shafts (bench/results/scale_fine.md):
+    ``kappa_C`` 1.02 with 40 modes, 0.88 with 80 (above its limit 0.5), 1.05 with 160 (a
+    mode just above that band's radius), 0.20 with 320. Stopping early needs the last two
+    sizes in a row to have failed (``hopeless``); 40 and 160 are not, so the band grows to
+    320 and is certified there. The band and its scan are stand-ins that replay those
+    values."""
+    band_module = importlib.import_module("rheolin.floquet.band")
+    complement_module = importlib.import_module("rheolin.floquet.complement")
+    replay = {40: 1.024, 80: 0.876, 160: 1.049, 320: 0.201}
+
+    class Band:
+        def __init__(self, system: object, k: int) -> None:
+            self.lam = np.zeros(k)
+
+    def scanned(system: object, band: Band, stop: float = 1.0) -> object:
+        kappa = replay[band.lam.size]
+        return complement_module.Complement(
+            certified=kappa < 1.0 and kappa <= stop, kappa=kappa, energy=True
+        )
+
+    monkeypatch.setattr(band_module, "BandAveraged", Band)
+    monkeypatch.setattr(band_module, "certify", scanned)
+    system = type("System", (), {"n": 1000})()
+    band = band_module.band_modes(system)
+    assert band.lam.size == 320 and band.complement.certified
+    # two failures in a row that would not shrink below 1 at the next size do stop it
+    replay[80] = 1.03
+    assert band_module.band_modes(system).lam.size == 80

@@ -226,7 +226,7 @@ def band_modes(
     ``budget`` bytes; from :data:`BAND_KEEP` modes on, while it exceeds :data:`KEEP_LIMIT`);
     the last one is returned, its ``complement`` saying what failed."""
     k = BAND_MODES if modes is None else int(modes)
-    failed: list[float] = []  # kappa_C of the bands that failed (>= 1), smallest band first
+    failed: list[float] = []  # kappa_C of the last bands in a row that failed (>= 1)
     cpu = {"arnoldi": 0.0, "scan": 0.0}  # CPU seconds of every band tried
     while True:
         t = time.process_time()
@@ -251,6 +251,8 @@ def band_modes(
             failed.append(c.kappa)
             if hopeless(failed):
                 return band
+        else:  # below 1 but above its limit: hopeless() compares consecutive sizes only
+            failed.clear()
         k = bigger
 
 
