@@ -305,8 +305,9 @@ def _campbell(step: float) -> dict:
 
 
 def _campbell_cli(step: float) -> dict:
-    """``rheolin campbell gearbox.toml --speeds 0:6000:<step>rpm`` with and without its
-    stability check, alternated twice: wall and CPU seconds of the faster run of each."""
+    """``rheolin campbell gearbox.toml --speeds 0:6000:<step>rpm`` without its stability
+    check, with it (default: on worker processes) and with it in one process, alternated
+    twice: wall and CPU seconds (workers included) of the faster run of each."""
     import os
     import resource
     import tempfile
@@ -319,13 +320,16 @@ def _campbell_cli(step: float) -> dict:
             [*rheolin, "example", "gearbox"], check=True, env=env, capture_output=True, text=True
         )
         Path(tmp, "gearbox.toml").write_text(model.stdout)
-        # alternated twice, the faster of each kept: the machine's speed drifts
-        for flag in ("off", "auto", "off", "auto"):
+        # alternated twice, the faster of each kept: the machine's speed drifts. "auto": the
+        # default (the check on a worker per core while the diagram is drawn), "one": the
+        # check in the command's process after the diagram (--workers 1)
+        options = {"off": ["--stability", "off"], "auto": [], "one": ["--workers", "1"]}
+        for flag in ("off", "auto", "one", "off", "auto", "one"):
             before = resource.getrusage(resource.RUSAGE_CHILDREN)
             t = time.perf_counter()
             done = subprocess.run(
                 [*rheolin, "campbell", "gearbox.toml", "--speeds", f"0:6000:{step:g}rpm",
-                 "--stability", flag, "--out", f"out_{flag}"],
+                 *options[flag], "--out", f"out_{flag}"],
                 cwd=tmp, env=env, capture_output=True, text=True,
             )  # fmt: skip
             wall = time.perf_counter() - t
@@ -467,7 +471,7 @@ def _map_lines(m: dict) -> list[str]:
 def _campbell_lines(c: dict) -> list[str]:
     per = np.array(c["per_speed"])
     cli = c["cli"]
-    off, on = cli["off"], cli["auto"]
+    off, on, one = cli["off"], cli["auto"], cli["one"]
     il = c["interleaved"]
     worst = int(np.argmax(per))
     step = 6000.0 / (c["speeds"] - 1)
@@ -488,15 +492,20 @@ def _campbell_lines(c: dict) -> list[str]:
         f"| check / diagram, interleaved | **{il['check'] / il['campbell']:.2f}x** | |",
         f"| `rheolin campbell gearbox.toml --speeds 0:6000:{step:g}rpm --stability off` | "
         f"{off['cpu']:.1f} | {off['wall']:.1f} |",
-        f"| the same with its default stability check | {on['cpu']:.1f} | {on['wall']:.1f} |",
+        f"| the same with its default stability check (a worker per core, the diagram "
+        f"drawn meanwhile) | {on['cpu']:.1f} | {on['wall']:.1f} |",
         f"| on / off | **{on['cpu'] / off['cpu']:.2f}x** | **{on['wall'] / off['wall']:.2f}x** |",
+        f"| the check in the command's process (`--workers 1`) | {one['cpu']:.1f} | "
+        f"{one['wall']:.1f} |",
+        f"| `--workers 1` / off | {one['cpu'] / off['cpu']:.2f}x | "
+        f"{one['wall'] / off['wall']:.2f}x |",
         "",
         f"Per speed of the map: median {np.median(per):.2f} s, the slowest "
         f"{per[worst]:.2f} s at {worst * step:g} rpm, the standstill {per[0]:.2f} s (the frozen "
         f"system); lattice orders {sorted(set(c['orders'][1:]))}; {c['continued']} speeds "
         f"continued from the previous one; {c['decided']} of {c['speeds']} verdicts decided "
         f"({c['stable']} stable), {c['ranges']} unstable ranges; exit codes "
-        f"{off['exit']} / {on['exit']}.",
+        f"{off['exit']} / {on['exit']} / {one['exit']}.",
     ]
     return lines
 

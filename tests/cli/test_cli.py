@@ -263,6 +263,28 @@ stiffness = ["1e12 N/m", "1e12 N/m", "1e12 N/m", "1e12 N*m/rad", "1e12 N*m/rad",
 """
 
 
+def test_campbell_checks_stability_on_workers(tmp_path):
+    """The rigid rotor on a spring fixed in its own axes (tests/study/study_cases.py): unstable
+    exactly between sqrt(k_x / m) = 100 and sqrt(k_y / m) = 110 rad/s. With ``--workers 2``
+    the check runs on two worker processes while the diagram is drawn: the range's bounds in
+    stability_map.nc and on the console, exit 1 (an unstable range)."""
+    (tmp_path / "band.toml").write_text(BAND)
+    out = tmp_path / "c"
+    res = cli("campbell", str(tmp_path / "band.toml"), "--speeds", "61:150:4rad/s",
+              "--workers", "2", "--out", str(out))  # fmt: skip
+    assert res.returncode == 1, res.stdout + res.stderr
+    ds = xr.open_dataset(out / "stability_map.nc")
+    # the bounds to the map's precision (MAP_PRECISION) around the closed form
+    assert float(ds["range_lower"][0]) == pytest.approx(100.0, rel=MAP_PRECISION)
+    assert float(ds["range_upper"][0]) == pytest.approx(110.0, rel=MAP_PRECISION)
+    assert ds.sizes["speed"] == 23
+    assert "unstable 954.93" in res.stdout and "1050.42" in res.stdout
+    assert (out / "campbell.nc").exists() and (out / "campbell.png").exists()
+    bad = cli("campbell", str(tmp_path / "band.toml"), "--speeds", "60:150:10rad/s",
+              "--workers", "0", "--out", str(tmp_path / "d"))  # fmt: skip
+    assert bad.returncode == 2 and "--workers" in bad.stderr
+
+
 def test_campbell_writes_the_gyroscopic_split_and_critical_speeds(tmp_path):
     """The overhung disk of tests/stability/test_campbell.py written as a model file: the
     forward/backward frequencies in campbell.nc solve the closed-form whirl quartic."""

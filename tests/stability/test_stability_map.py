@@ -171,3 +171,31 @@ def test_rotating_damping_onset(ratio: float) -> None:
     # growth rate of the forward mode: z = x + i y, m z'' + (c_n + c_r) z' + (k - i c_r W) z
     roots = np.roots([m, c_n + c_r, k - 1j * c_r * speeds[-1]])
     assert smap.max_real[-1] == pytest.approx(roots.real.max(), rel=1e-8)
+
+
+# --------------------------------------------------------------------------- worker processes
+def test_map_on_workers_against_mathieu() -> None:
+    """The gear pair's principal band on two worker processes (speeds in contiguous blocks,
+    each continued within itself; the bounds refined here afterwards): the Mathieu bounds,
+    and speed by speed the verdicts and largest real parts of the map in one process."""
+    rb1 = MODULE * Z1 / 2 * np.cos(ALPHA)
+    rb2 = MODULE * Z2 / 2 * np.cos(ALPHA)
+    omega0 = np.sqrt(K0 * (rb1**2 / J1 + rb2**2 / J2))
+    lo, hi = _mathieu_speed_band(1, omega0)
+    model = _gear_model(kb=1e13)
+    mesh = model.speed_plan().mesh[0]
+    H = rl.HarmonicSet(mesh * np.arange(0, 5))
+    speeds = np.linspace(lo - 0.3 * (hi - lo), hi + 0.3 * (hi - lo), 6)
+    seen: list[int] = []
+    smap = stability_map(
+        model, speeds, harmonics=H, refine=1e-6, workers=2, progress=lambda i, r: seen.append(i)
+    )
+    (r,) = smap.ranges
+    assert r.lower == pytest.approx(lo, rel=2e-5), (r.lower, lo)
+    assert r.upper == pytest.approx(hi, rel=2e-5), (r.upper, hi)
+    assert sorted(seen) == list(range(speeds.size))
+    alone = stability_map(model, speeds, harmonics=H, refine=1e-6)
+    assert smap.state.tolist() == alone.state.tolist()
+    np.testing.assert_allclose(smap.max_real, alone.max_real, rtol=1e-9, atol=1e-9)
+    with pytest.raises(ValueError, match="workers"):
+        stability_map(model, speeds, workers=0)

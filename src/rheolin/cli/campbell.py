@@ -3,6 +3,8 @@ map over the same speeds."""
 
 from __future__ import annotations
 
+import threading
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -35,6 +37,10 @@ __all__ = ["CAMPBELL_FILES", "campbell", "register"]
 #: Files ``campbell`` writes into its output directory (an earlier run's are replaced as a set).
 CAMPBELL_FILES = {"campbell.nc", "campbell.png", "stability_map.nc", "report.html"}
 
+#: From this many spinning speeds on, the stability check runs on worker processes by
+#: default (starting them costs a few seconds).
+PARALLEL_SPEEDS = 8
+
 
 def campbell(
     model: Path = MODEL,
@@ -46,6 +52,12 @@ def campbell(
     stability: str = STABILITY,
     floquet_accuracy: float = FLOQUET_RTOL,
     report: bool = typer.Option(False, "--report", help="Also write DIR/report.html."),
+    workers: int = typer.Option(
+        None,
+        help="Worker processes for the stability check (default: the cores, from "
+        f"{PARALLEL_SPEEDS} spinning speeds on; 1: in this process). The diagram is computed "
+        "meanwhile.",
+    ),
 ) -> None:
     """Campbell diagram: DIR/campbell.nc and DIR/campbell.png, critical speeds printed;
     with the Floquet stability of the full time-periodic system at every speed (as run and
@@ -60,6 +72,8 @@ def campbell(
     accuracy = floquet_rtol(floquet_accuracy)
     if fmax is not None and not (np.isfinite(fmax) and fmax > 0):
         raise fail(f"--fmax: must be a frequency > 0 in Hz, got {fmax}")
+    if workers is not None and workers < 1:
+        raise fail(f"--workers: must be >= 1, got {workers}")
     out_dir = output_dir(out, f"{model.stem}_campbell")
     if spinning.size:
         preflight(lm, spinning, None, None, needs_load=False)
@@ -68,13 +82,15 @@ def campbell(
 
     set_kept(f"nothing written; {out_dir} is unchanged")
     with sigterm_as_interrupt():
-        with counted("Campbell diagram", w.size, "speeds") as step:
-            result = campbell_fn(lm.model, w, progress=step)
-        smap, why = (
-            _stability_map(lm.model, w, flag, accuracy)
-            if spinning.size
-            else (None, "standstill only")
-        )
+
+        def diagram() -> Any:
+            with counted("Campbell diagram", w.size, "speeds") as step:
+                return campbell_fn(lm.model, w, progress=step)
+
+        if spinning.size:
+            result, (smap, why) = _with_stability(lm.model, w, flag, accuracy, workers, diagram)
+        else:
+            result, smap, why = diagram(), None, "standstill only"
     with sigterm_as_interrupt(), staged_output(out_dir, CAMPBELL_FILES) as stage:
         ds = result.to_dataset()
         ds.attrs.update(model_file=str(model), model_sha256=lm.sha256, rheolin_version=__version__)
@@ -144,38 +160,90 @@ def _bound(w: float, unc: float) -> str:
     return f"{rpm:.1f}" if not np.isfinite(unc) else f"{rpm:.2f} (+-{unc * 30 / np.pi:.2g})"
 
 
-def _stability_map(
-    model: Any, speeds: np.ndarray, flag: bool | None, accuracy: float | None = None
-) -> tuple[Any, str]:
-    """The stability map over the Campbell speeds (None and why when it is not computed)."""
+def _with_stability(
+    model: Any,
+    speeds: np.ndarray,
+    flag: bool | None,
+    accuracy: float | None,
+    workers: int | None,
+    diagram: Callable[[], Any],
+) -> tuple[Any, tuple[Any, str]]:
+    """The diagram and the stability map over the Campbell speeds (None and why when it is
+    not computed). With more than one worker the map's blocks run on a local cluster while
+    this process computes the diagram."""
     if flag is False:
-        return None, "--stability off"
+        return diagram(), (None, "--stability off")
     from ..budget import format_bytes, memory_budget
     from ..floquet import floquet_memory
-    from ..stability import stability_map as map_fn
-    from ..study.run import MAP_PRECISION
+    from ..study.executor import cores
 
     kind, estimate = floquet_memory(model.assemble(float(speeds[-1])).system)
-    if flag is None and estimate > memory_budget():
-        return None, (
+    budget = memory_budget()
+    if flag is None and estimate > budget:
+        return diagram(), (
+            None,
             f"the {kind} Hill problem needs an estimated {format_bytes(estimate)}, more than "
-            f"the memory budget of {format_bytes(memory_budget())}"
+            f"the memory budget of {format_bytes(budget)}",
         )
+    spinning = int(np.sum(speeds > 0))
+    n = workers if workers is not None else (cores() if spinning >= PARALLEL_SPEEDS else 1)
+    n = max(1, min(n, spinning, int(budget // max(estimate, 1))))
+    if n == 1:
+        result = diagram()
+        with counted("Floquet stability", len(speeds), "speeds") as step:
+            return result, _stability_map(model, speeds, flag, accuracy, lambda i: step(i + 1))
+    from ..study.executor import local_cluster
+
+    done: list[int] = []
+    box: dict[str, Any] = {}
+
+    def check() -> None:
+        try:
+            box["map"] = _stability_map(
+                model, speeds, flag, accuracy, lambda i: done.append(i), client=client
+            )
+        except BaseException as exc:  # raised again in this thread
+            box["error"] = exc
+
+    with local_cluster(n) as client:
+        thread = threading.Thread(target=check, name="rheolin-stability", daemon=True)
+        thread.start()
+        result = diagram()
+        with counted("Floquet stability", len(speeds), "speeds") as step:
+            while thread.is_alive():
+                thread.join(0.2)
+                step(len(done))
+    if "error" in box:
+        raise box["error"]
+    return result, box["map"]
+
+
+def _stability_map(
+    model: Any,
+    speeds: np.ndarray,
+    flag: bool | None,
+    accuracy: float | None,
+    progress: Callable[[int], None],
+    client: Any = None,
+) -> tuple[Any, str]:
+    """The stability map over the Campbell speeds (on ``client``'s workers when given)."""
+    from ..stability import stability_map as map_fn
+    from ..study.run import MAP_PRECISION
     from ..system.rigid_modes import FreeBodyError
 
-    with counted("Floquet stability", len(speeds), "speeds") as step:
-        try:
-            smap = map_fn(
-                model,
-                speeds,
-                refine=MAP_PRECISION,
-                progress=lambda i, r: step(i + 1),
-                rtol=accuracy,
-            )
-        except FreeBodyError as exc:  # a free body has modes, but no operating point
-            if flag:
-                raise
-            return None, str(exc)
+    try:
+        smap = map_fn(
+            model,
+            speeds,
+            refine=MAP_PRECISION,
+            progress=lambda i, r: progress(i),
+            rtol=accuracy,
+            client=client,
+        )
+    except FreeBodyError as exc:  # a free body has modes, but no operating point
+        if flag:
+            raise
+        return None, str(exc)
     return smap, ""
 
 
