@@ -10,11 +10,23 @@ Steps, timed side by side in one process, with the peak resident memory:
 3. the gearbox model file with its six bearings rewired from ground to the housing
    (``other_body``), read back;
 4. one steady state (``method="auto"``, the gearbox's harmonic set), and its Floquet
-   verdict when asked (``--stability``).
+   verdict when asked (``--stability``);
+5. with ``--runup``: the stability map over those speeds (each continued from the previous
+   one where the map does that; on ``--workers`` processes), the verdict per speed (and its
+   CPU seconds in one process) and the map's time.
+
+``--shaft-dof N`` meshes the gearbox's shafts finely first (every element split so that the
+shafts have about N DOF, :func:`rheolin.data.fine.refine_model`), the housing unchanged;
+``--band-check K`` adds the verdict from a band of K modes beside the default one (below the
+dense limit: the band against the dense method on the same model).
 
 Usage::
 
     OPENBLAS_NUM_THREADS=1 python bench/scale.py --element 0.006 --out bench/results/scale.md
+    OPENBLAS_NUM_THREADS=1 python bench/scale.py --element 0.006 --shaft-dof 2600 \
+        --runup 2700 2800 2900 3000 3100 3200 3300 --workers 2 --out bench/results/scale_fine.md
+    OPENBLAS_NUM_THREADS=1 python bench/scale.py --element 0.006 --shaft-dof 1800 --stability \
+        --band-check 320 --out bench/results/scale_dense.md
 """
 
 from __future__ import annotations
@@ -23,13 +35,16 @@ import argparse
 import sys
 import tempfile
 import time
+import tomllib
 from pathlib import Path
 
 import numpy as np
+import tomli_w
 
 sys.path.insert(0, str(Path(__file__).parent))
 import rheolin as rl
 from _memory import reset_peak, status_kb
+from rheolin.data.fine import gearbox_subdivisions, refine_model
 from rheolin.fe import condense
 from rheolin.fe.gearbox_housing import ORIGIN, housing, rewired, seat_couplings
 from rheolin.io import read_model
@@ -46,6 +61,15 @@ def main() -> None:
     ap.add_argument("--cutoff", type=float, default=3000.0, help="modes kept below [Hz]")
     ap.add_argument("--speed", type=float, default=3000.0, help="input speed [rpm]")
     ap.add_argument("--stability", action="store_true", help="also the Floquet verdict")
+    ap.add_argument("--shaft-dof", type=int, default=0, help="mesh the shafts to ~N DOF")
+    ap.add_argument("--runup", type=float, nargs="*", default=[], help="map speeds [rpm]")
+    ap.add_argument("--workers", type=int, default=1, help="worker processes of the run-up")
+    ap.add_argument(
+        "--band-check",
+        type=int,
+        default=0,
+        help="with --stability: also the verdict from a band of N modes (below the dense limit)",
+    )
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
     rows: list[tuple[str, str]] = []
@@ -74,7 +98,12 @@ def main() -> None:
         npz = Path(tmp) / "housing.npz"
         body.save(npz)
         model_path = Path(tmp) / "gearbox_in_housing.toml"
-        model_path.write_text(rewired(npz.name, body.positions))
+        text = rewired(npz.name, body.positions)
+        if args.shaft_dof:
+            spec = tomllib.loads(text)
+            m = gearbox_subdivisions(args.shaft_dof)
+            text = tomli_w.dumps(refine_model(spec, {s["name"]: m for s in spec["shafts"]}))
+        model_path.write_text(text)
         t0 = time.perf_counter()
         lm = read_model(model_path)
         model = lm.model
@@ -101,8 +130,24 @@ def main() -> None:
             rows.append((
                 "Floquet verdict",
                 f"{time.perf_counter() - t0:.1f} s: {'stable' if res.stable else 'unstable'}, "
-                f"decided {res.decided}, largest real part {res.max_real:.4g} 1/s",
+                f"decided {res.decided}, largest real part {res.max_real:.10g} 1/s "
+                f"(+-{res.max_real_uncertainty:.2g}), {res.method} method",
             ))  # fmt: skip
+            print(rows[-1], flush=True)
+            if args.band_check:
+                t0 = time.perf_counter()
+                res = rl.floquet(p.assembled.system, band=args.band_check)
+                band = res.info.get("band", {})
+                rows.append((
+                    f"Floquet verdict from a band of {args.band_check} modes",
+                    f"{time.perf_counter() - t0:.1f} s: "
+                    f"{'stable' if res.stable else 'unstable'}, decided {res.decided}, largest "
+                    f"real part {res.max_real:.10g} 1/s (+-{res.max_real_uncertainty:.2g}), "
+                    f"kappa_C {band.get('kappa', float('nan')):.3g} ({band.get('norm', '-')} norm)",
+                ))  # fmt: skip
+                print(rows[-1], flush=True)
+        if args.runup:
+            rows.append(_runup(model, args.runup, args.workers))
             print(rows[-1], flush=True)
     total = time.perf_counter() - t_all
     peak = max(peak_before, peak_mb())
@@ -110,13 +155,53 @@ def main() -> None:
     text = (
         f"# Gearbox in a {fe.n_dof:,}-DOF housing\n\n"
         f"`OPENBLAS_NUM_THREADS=1 python bench/scale.py --element {args.element} --cutoff "
-        f"{args.cutoff:g} --speed {args.speed:g}{' --stability' if args.stability else ''}`, "
+        f"{args.cutoff:g} --speed {args.speed:g}{' --stability' if args.stability else ''}"
+        f"{f' --shaft-dof {args.shaft_dof}' if args.shaft_dof else ''}"
+        f"{' --runup ' + ' '.join(f'{x:g}' for x in args.runup) if args.runup else ''}"
+        f"{f' --workers {args.workers}' if args.workers > 1 else ''}"
+        f"{f' --band-check {args.band_check}' if args.band_check else ''}`, "
         "2 cores.\n\n| step | result |\n|---|---|\n" + "".join(f"| {a} | {b} |\n" for a, b in rows)
     )
     print(text)
     if args.out:
         Path(args.out).write_text(text)
         print(f"wrote {args.out}")
+
+
+def _runup(model: object, rpm: list[float], workers: int = 1) -> tuple[str, str]:
+    """The stability map over ``rpm`` (on ``workers`` processes): per speed its verdict (and
+    its CPU seconds when in this process), the map's wall time."""
+    from rheolin.stability import stability_map
+    from rheolin.study.run import MAP_PRECISION
+
+    speeds = np.asarray(sorted(rpm)) * np.pi / 30
+    lines: list[str] = []
+    last = [time.process_time()]
+
+    def tick(i: int, res: object) -> None:
+        now = time.process_time()
+        band = getattr(res, "info", {}).get("band", {})
+        state = "undecided" if not res.decided else ("stable" if res.stable else "unstable")
+        cost = f"{now - last[0]:.0f} CPU s, " if workers == 1 else ""
+        lines.append(
+            f"{speeds[i] * 30 / np.pi:g} rpm: {state}, {res.max_real:.6g} 1/s, "
+            f"{cost}band {band.get('modes', '-')} modes "
+            f"(kappa_C {band.get('kappa', float('nan')):.2f}, {band.get('norm', '-')} norm)"
+        )
+        print(lines[-1], flush=True)
+        last[0] = now
+
+    t0, wall = time.process_time(), time.perf_counter()
+    smap = stability_map(model, speeds, refine=MAP_PRECISION, progress=tick, workers=workers)
+    cpu, wall = time.process_time() - t0, time.perf_counter() - wall
+    decided = int(np.sum(smap.decided))
+    where = f"{cpu:.0f} CPU s" if workers == 1 else f"{workers} workers, {wall:.0f} s wall"
+    return (
+        f"run-up, {speeds.size} speeds",
+        f"{where}, {decided} of {speeds.size} decided, "
+        f"{int(smap.info.get('continued', 0))} continued from the previous speed, "
+        f"{len(smap.ranges)} unstable ranges: " + "; ".join(lines),
+    )
 
 
 if __name__ == "__main__":
