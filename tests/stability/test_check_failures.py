@@ -22,9 +22,9 @@ from rheolin.stability import stability_map
 sys.path.insert(0, str(Path(__file__).parent))
 from test_stability_map import STIFF, _band
 
-import rheolin.stability.stability_map  # noqa: F401  (the module, for its floquet)
-
+# the modules whose floquet the map calls (loaded with rheolin.stability)
 map_module = sys.modules["rheolin.stability.stability_map"]
+verdicts_module = sys.modules["rheolin.stability.verdicts"]  # the map's speeds and edges
 
 M, KX, KY, C = 2.0, 4e3, 1.6e4, 15.0
 LO, HI = _band(M, KX, KY, C)
@@ -48,6 +48,7 @@ def _failing(monkeypatch, where) -> None:
         return real(system, *args, **kwargs)
 
     monkeypatch.setattr(map_module, "floquet", floquet)
+    monkeypatch.setattr(verdicts_module, "floquet", floquet)
 
 
 def test_a_failed_sample_is_undecided_with_its_reason(monkeypatch) -> None:

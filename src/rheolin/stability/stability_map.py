@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -10,8 +9,6 @@ from typing import Any
 import numpy as np
 
 from ..floquet import FloquetResult, floquet
-from ..floquet.result import guarded
-from ..harmonics.sets import as_harmonic_set
 from .mechanism import (
     ASYMMETRY,
     CIRCULATORY,
@@ -23,26 +20,18 @@ from .mechanism import (
 )
 from .mechanism import identify as _identify
 from .ranges import edge_between, states, unstable_runs
-from .standstill import STANDSTILL, STANDSTILL_NOTE, standstill_verdict
+from .standstill import STANDSTILL_NOTE
+from .verdicts import Verdicts, continued_verdicts, in_parallel
 
 __all__ = [
     "StabilityMap",
     "UnstableRange",
-    "Verdicts",
-    "blocks_of",
     "map_from_results",
     "mechanism",
     "stability_map",
-    "verdict_block",
 ]
 
 __categories__ = (ROTATING_DAMPING, CIRCULATORY, MESH, ASYMMETRY, COMBINED, UNIDENTIFIED)
-
-#: A speed of a map continues the previous speed's lattice searches only when it is at most
-#: this fraction above it: farther, the copies of the exponents at the mesh harmonics have
-#: moved past their neighbours and the tracked representatives are other copies, which a
-#: finer lattice then cannot settle (docs/stability.md, section 5).
-CONTINUED_STEP = 0.02
 
 
 @dataclass(frozen=True)
@@ -233,10 +222,10 @@ def stability_map(
     stability with its automatic truncation (dense Hill for small systems, the harmonic
     lattice for gearboxes; balanced pencil, per-exponent tolerances), each speed continued
     from the previous one (:class:`~rheolin.floquet.Continuation`) when it is at most
-    :data:`CONTINUED_STEP` above it, else from scratch (``info["continued"]`` counts the
-    continued speeds). A speed of 0 is the standstill: the time-invariant system frozen at
-    ``t = 0`` (:mod:`rheolin.stability.standstill`; ``info["standstill"]`` says so).
-    Contiguous samples that
+    :data:`~rheolin.stability.verdicts.CONTINUED_STEP` above it, else from scratch
+    (``info["continued"]`` counts the continued speeds). A speed of 0 is the standstill:
+    the time-invariant system frozen at ``t = 0`` (:mod:`rheolin.stability.standstill`;
+    ``info["standstill"]`` says so). Contiguous samples that
     are not decided stable, with at least one decided unstable, form an
     :class:`UnstableRange`; its bounds are refined between the bracketing decided samples
     to a relative precision ``refine`` where every evaluation is a full, decided verdict
@@ -270,11 +259,12 @@ def stability_map(
         not refined beyond what the verdict needs, ``max_real_uncertainty`` says how far).
     workers
         Worker processes for the speeds' verdicts (a local Dask cluster, one BLAS thread
-        each): the speeds are split into contiguous blocks (:func:`blocks_of`: the runs
-        that are continued from speed to speed apart, the longest halved until there are
-        two blocks per worker), each continued within itself, and each worker gets its share
-        of the memory budget; ``progress`` is then called as each block ends. 1 (default):
-        in this process. The range bounds are refined here afterwards.
+        each): the speeds are split into contiguous blocks
+        (:func:`~rheolin.stability.verdicts.blocks_of`: the runs that are continued from
+        speed to speed apart, the longest halved until there are two blocks per worker),
+        each continued within itself, and each worker gets its share of the memory budget;
+        ``progress`` is then called as each block ends. 1 (default): in this process. The
+        range bounds are refined here afterwards.
     client
         A ``distributed.Client`` to run the blocks on instead (``workers`` is then ignored).
 
@@ -308,9 +298,9 @@ def stability_map(
     evaluate = task.evaluator()
     parallel = client is not None or (workers is not None and int(workers) > 1)
     if parallel and speeds.size > 1 and not callable(harmonics):
-        results, continued = _in_parallel(task, workers, client, progress)
+        results, continued = in_parallel(task, workers, client, progress)
     else:
-        results, continued = _continued(task, evaluate, progress)
+        results, continued = continued_verdicts(task, evaluate, progress)
     smap = map_from_results(
         model,
         speeds,
@@ -327,188 +317,6 @@ def stability_map(
         smap.info["standstill"] = STANDSTILL_NOTE
     smap.info["seconds"] = time.perf_counter() - t0
     return smap
-
-
-@dataclass(frozen=True)
-class Verdicts:
-    """What the verdicts of a map's speeds are computed with (a worker's task: picklable
-    unless ``harmonics`` is a callable)."""
-
-    model: Any
-    speeds: np.ndarray
-    harmonics: Any = None
-    method: str = "auto"
-    order: int | None = None
-    memory_budget: Any = None
-    rtol: float | None = None
-    key: str = ""  # a map's tasks share their model's speed template in a worker
-
-    def evaluator(self) -> Callable[..., tuple[Any, FloquetResult]]:
-        """``evaluate(W, continuation, accuracy, lattice_order)``: the model assembled at
-        ``W`` (through its speed template) and its Floquet result."""
-        template: Callable[[], Any] = (
-            functools.partial(_shared_template, self.key, self.model)
-            if self.key
-            else functools.cache(self.model.speed_template)
-        )
-
-        def truncation(system: Any) -> Any:
-            if self.harmonics is None:
-                return None
-            if callable(self.harmonics):
-                return as_harmonic_set(self.harmonics(system))
-            return as_harmonic_set(self.harmonics)
-
-        def evaluate(
-            W: float,
-            continuation: Any = None,
-            accuracy: float | None = self.rtol,
-            lattice_order: int | None = None,
-        ) -> tuple[Any, FloquetResult]:
-            # assembled once, rescaled at every speed (the same system as
-            # ``model.assemble``, a fifteenth of its cost on the gearbox)
-            a = template().assemble(float(W))
-            if lattice_order is not None:
-                res = floquet(
-                    a.system,
-                    method="lattice",
-                    order=lattice_order,
-                    memory_budget=self.memory_budget,
-                    continuation=continuation,
-                    rtol=accuracy,
-                )
-                return a, res
-            res = floquet(
-                a.system,
-                truncation(a.system),
-                method=self.method,
-                order=self.order,
-                memory_budget=self.memory_budget,
-                continuation=continuation,
-                rtol=accuracy,
-            )
-            return a, res
-
-        return evaluate
-
-
-def _continued(
-    task: Verdicts,
-    evaluate: Callable[..., tuple[Any, FloquetResult]],
-    progress: Callable[[int, FloquetResult], None] | None = None,
-) -> tuple[list[FloquetResult], int]:
-    """The verdict at each of ``task.speeds`` in turn, each continued from the previous one
-    when it is at most :data:`CONTINUED_STEP` above it; the results and how many were
-    continued."""
-    from ..floquet import Continuation
-
-    speeds = task.speeds
-    cont = Continuation()  # each speed's lattice searches start from the previous speed's
-    results: list[FloquetResult] = []
-
-    def at(W: float) -> FloquetResult:
-        if W == 0:  # nothing turns: the frozen time-invariant system, exact
-            return standstill_verdict(task.model, STANDSTILL, memory_budget=task.memory_budget)
-        return evaluate(W, continuation=cont)[1]
-
-    continued = 0
-    for i, W in enumerate(speeds):
-        if i and W - speeds[i - 1] > CONTINUED_STEP * W:
-            cont.clear()  # too far from the previous speed: a verdict from scratch
-        else:
-            continued += int(i > 0)
-        results.append(guarded(at, W))
-        if results[-1].method == "failed":  # this speed undecided, with the reason
-            cont.clear()
-        if progress is not None:
-            progress(i, results[-1])
-    return results, continued
-
-
-#: Speed templates of the maps a worker process has seen, by the map's key (the last few).
-_TEMPLATES: dict[str, Any] = {}
-
-
-def _shared_template(key: str, model: Any) -> Any:
-    """The speed template of the map ``key`` in this process, assembled once."""
-    if key not in _TEMPLATES:
-        while len(_TEMPLATES) >= 2:
-            _TEMPLATES.pop(next(iter(_TEMPLATES)))
-        _TEMPLATES[key] = model.speed_template()
-    return _TEMPLATES[key]
-
-
-def blocks_of(speeds: np.ndarray, count: int) -> list[np.ndarray]:
-    """The indices of ``speeds`` in contiguous blocks for ``count`` worker slots: the runs
-    a map continues from speed to speed (steps of at most :data:`CONTINUED_STEP`) apart,
-    the longest split in halves until there are ``count`` blocks or every block is one
-    speed.
-
-    >>> rpm = np.array([100.0, 101, 102, 103, 200, 300, 301])
-    >>> [b.tolist() for b in blocks_of(rpm, 4)]
-    [[0, 1], [2, 3], [4], [5, 6]]
-    """
-    if speeds.size == 0:
-        return []
-    wide = np.flatnonzero(np.diff(speeds) > CONTINUED_STEP * speeds[1:]) + 1
-    blocks = [b for b in np.split(np.arange(speeds.size), wide) if b.size]
-    while len(blocks) < count:
-        longest = max(range(len(blocks)), key=lambda i: blocks[i].size)
-        b = blocks[longest]
-        if b.size < 2:
-            break
-        blocks[longest : longest + 1] = [b[: b.size // 2], b[b.size // 2 :]]
-    return blocks
-
-
-def verdict_block(task: Verdicts) -> tuple[list[FloquetResult], int]:
-    """A worker's task: the verdicts of one block of a map's speeds (:func:`_continued`)."""
-    return _continued(task, task.evaluator())
-
-
-def _in_parallel(
-    task: Verdicts,
-    workers: int | None,
-    client: Any,
-    progress: Callable[[int, FloquetResult], None] | None,
-) -> tuple[list[FloquetResult], int]:
-    """The verdicts of ``task.speeds`` in contiguous blocks on worker processes."""
-    import contextlib
-    import uuid
-    from dataclasses import replace
-
-    from ..budget import memory_budget as default_budget
-    from ..study.executor import DaskExecutor, local_cluster
-
-    speeds = task.speeds
-    n = int(workers) if workers is not None else 1
-    if client is not None:
-        n = max(1, sum(client.nthreads().values()))
-    blocks = blocks_of(speeds, 2 * n)
-    share = default_budget(task.memory_budget) // max(min(n, len(blocks)), 1)
-    key = uuid.uuid4().hex
-    results: list[FloquetResult | None] = [None] * speeds.size
-    continued = 0
-    context = contextlib.nullcontext(client) if client is not None else local_cluster(n)
-    with context as c:
-        ex = DaskExecutor(c)
-        running = {}
-        for b in blocks:
-            part = replace(task, speeds=speeds[b], memory_budget=share, key=key)
-            running[ex.submit(verdict_block, part)] = b
-        while running:
-            handle, out, error = ex.next_done()
-            b = running.pop(handle)
-            if error is not None:
-                ex.cancel()
-                raise error
-            found, k = out
-            continued += k
-            for i, res in zip(b, found, strict=True):
-                results[int(i)] = res
-                if progress is not None:
-                    progress(int(i), res)
-    return [r for r in results if r is not None], continued
 
 
 def map_from_results(

@@ -1,0 +1,214 @@
+"""The verdicts of a stability map's speeds (:func:`~rheolin.stability.stability_map`): one
+after the other, each continued from the previous speed where it is close, or in contiguous
+blocks on worker processes."""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..floquet import FloquetResult, floquet
+from ..floquet.result import guarded
+from ..harmonics.sets import as_harmonic_set
+from .standstill import STANDSTILL, standstill_verdict
+
+__all__ = [
+    "CONTINUED_STEP",
+    "Verdicts",
+    "blocks_of",
+    "continued_verdicts",
+    "in_parallel",
+    "verdict_block",
+]
+
+#: A speed of a map continues the previous speed's lattice searches only when it is at most
+#: this fraction above it: farther, the copies of the exponents at the mesh harmonics have
+#: moved past their neighbours and the tracked representatives are other copies, which a
+#: finer lattice then cannot settle (docs/stability.md, section 5).
+CONTINUED_STEP = 0.02
+
+
+@dataclass(frozen=True)
+class Verdicts:
+    """What the verdicts of a map's speeds are computed with (a worker's task: picklable
+    unless ``harmonics`` is a callable)."""
+
+    model: Any
+    speeds: np.ndarray
+    harmonics: Any = None
+    method: str = "auto"
+    order: int | None = None
+    memory_budget: Any = None
+    rtol: float | None = None
+    key: str = ""  # a map's tasks share their model's speed template in a worker
+
+    def evaluator(self) -> Callable[..., tuple[Any, FloquetResult]]:
+        """``evaluate(W, continuation, accuracy, lattice_order)``: the model assembled at
+        ``W`` (through its speed template) and its Floquet result."""
+        template: Callable[[], Any] = (
+            functools.partial(_shared_template, self.key, self.model)
+            if self.key
+            else functools.cache(self.model.speed_template)
+        )
+
+        def truncation(system: Any) -> Any:
+            if self.harmonics is None:
+                return None
+            if callable(self.harmonics):
+                return as_harmonic_set(self.harmonics(system))
+            return as_harmonic_set(self.harmonics)
+
+        def evaluate(
+            W: float,
+            continuation: Any = None,
+            accuracy: float | None = self.rtol,
+            lattice_order: int | None = None,
+        ) -> tuple[Any, FloquetResult]:
+            # assembled once, rescaled at every speed (the same system as
+            # ``model.assemble``, a fifteenth of its cost on the gearbox)
+            a = template().assemble(float(W))
+            if lattice_order is not None:
+                res = floquet(
+                    a.system,
+                    method="lattice",
+                    order=lattice_order,
+                    memory_budget=self.memory_budget,
+                    continuation=continuation,
+                    rtol=accuracy,
+                )
+                return a, res
+            res = floquet(
+                a.system,
+                truncation(a.system),
+                method=self.method,
+                order=self.order,
+                memory_budget=self.memory_budget,
+                continuation=continuation,
+                rtol=accuracy,
+            )
+            return a, res
+
+        return evaluate
+
+
+def continued_verdicts(
+    task: Verdicts,
+    evaluate: Callable[..., tuple[Any, FloquetResult]],
+    progress: Callable[[int, FloquetResult], None] | None = None,
+) -> tuple[list[FloquetResult], int]:
+    """The verdict at each of ``task.speeds`` in turn, each continued from the previous one
+    when it is at most :data:`CONTINUED_STEP` above it; the results and how many were
+    continued."""
+    from ..floquet import Continuation
+
+    speeds = task.speeds
+    cont = Continuation()  # each speed's lattice searches start from the previous speed's
+    results: list[FloquetResult] = []
+
+    def at(W: float) -> FloquetResult:
+        if W == 0:  # nothing turns: the frozen time-invariant system, exact
+            return standstill_verdict(task.model, STANDSTILL, memory_budget=task.memory_budget)
+        return evaluate(W, continuation=cont)[1]
+
+    continued = 0
+    for i, W in enumerate(speeds):
+        if i and W - speeds[i - 1] > CONTINUED_STEP * W:
+            cont.clear()  # too far from the previous speed: a verdict from scratch
+        else:
+            continued += int(i > 0)
+        results.append(guarded(at, W))
+        if results[-1].method == "failed":  # this speed undecided, with the reason
+            cont.clear()
+        if progress is not None:
+            progress(i, results[-1])
+    return results, continued
+
+
+#: Speed templates of the maps a worker process has seen, by the map's key (the last few).
+_TEMPLATES: dict[str, Any] = {}
+
+
+def _shared_template(key: str, model: Any) -> Any:
+    """The speed template of the map ``key`` in this process, assembled once."""
+    if key not in _TEMPLATES:
+        while len(_TEMPLATES) >= 2:
+            _TEMPLATES.pop(next(iter(_TEMPLATES)))
+        _TEMPLATES[key] = model.speed_template()
+    return _TEMPLATES[key]
+
+
+def blocks_of(speeds: np.ndarray, count: int) -> list[np.ndarray]:
+    """The indices of ``speeds`` in contiguous blocks for ``count`` worker slots: the runs
+    a map continues from speed to speed (steps of at most :data:`CONTINUED_STEP`) apart,
+    the longest split in halves until there are ``count`` blocks or every block is one
+    speed.
+
+    >>> rpm = np.array([100.0, 101, 102, 103, 200, 300, 301])
+    >>> [b.tolist() for b in blocks_of(rpm, 4)]
+    [[0, 1], [2, 3], [4], [5, 6]]
+    """
+    if speeds.size == 0:
+        return []
+    wide = np.flatnonzero(np.diff(speeds) > CONTINUED_STEP * speeds[1:]) + 1
+    blocks = [b for b in np.split(np.arange(speeds.size), wide) if b.size]
+    while len(blocks) < count:
+        longest = max(range(len(blocks)), key=lambda i: blocks[i].size)
+        b = blocks[longest]
+        if b.size < 2:
+            break
+        blocks[longest : longest + 1] = [b[: b.size // 2], b[b.size // 2 :]]
+    return blocks
+
+
+def verdict_block(task: Verdicts) -> tuple[list[FloquetResult], int]:
+    """A worker's task: the verdicts of one block of a map's speeds (:func:`continued_verdicts`)."""
+    return continued_verdicts(task, task.evaluator())
+
+
+def in_parallel(
+    task: Verdicts,
+    workers: int | None,
+    client: Any,
+    progress: Callable[[int, FloquetResult], None] | None,
+) -> tuple[list[FloquetResult], int]:
+    """The verdicts of ``task.speeds`` in contiguous blocks on worker processes."""
+    import contextlib
+    import uuid
+    from dataclasses import replace
+
+    from ..budget import memory_budget as default_budget
+    from ..study.executor import DaskExecutor, local_cluster
+
+    speeds = task.speeds
+    n = int(workers) if workers is not None else 1
+    if client is not None:
+        n = max(1, sum(client.nthreads().values()))
+    blocks = blocks_of(speeds, 2 * n)
+    share = default_budget(task.memory_budget) // max(min(n, len(blocks)), 1)
+    key = uuid.uuid4().hex
+    results: list[FloquetResult | None] = [None] * speeds.size
+    continued = 0
+    context = contextlib.nullcontext(client) if client is not None else local_cluster(n)
+    with context as c:
+        ex = DaskExecutor(c)
+        running = {}
+        for b in blocks:
+            part = replace(task, speeds=speeds[b], memory_budget=share, key=key)
+            running[ex.submit(verdict_block, part)] = b
+        while running:
+            handle, out, error = ex.next_done()
+            b = running.pop(handle)
+            if error is not None:
+                ex.cancel()
+                raise error
+            found, k = out
+            continued += k
+            for i, res in zip(b, found, strict=True):
+                results[int(i)] = res
+                if progress is not None:
+                    progress(int(i), res)
+    return [r for r in results if r is not None], continued
