@@ -88,7 +88,9 @@ def test_loop_gain_in_the_energy_norm_matches_the_dense_norm(
     """``kappa_C(s) = sum_k ||G_C(s) E_k(s - i k w1)||_S`` from the scan (exact low-rank
     blocks for the harmonics that touch few DOFs, power iteration for the others: both ways
     for every harmonic) against the dense operator norms ``||L^H G_C E_k L^-H||_2``,
-    ``S = L L^H``. The values span 0.26 to 0.67 here."""
+    ``S = L L^H``, and ``q_S = sum_k sum_m ||G_C(s) E_k x_m||_S`` over the band's
+    displacement vectors against the same dense products. The values span 0.26 to 0.67
+    here."""
     monkeypatch.setattr(importlib.import_module("rheolin.floquet.complement"), "LOW_RANK", low_rank)
     band = BandAveraged(gearbox, 80)
     scan = Scan(gearbox, band)
@@ -103,14 +105,16 @@ def test_loop_gain_in_the_energy_norm_matches_the_dense_norm(
     for omega in (0.5, 2.0e3, 1.2e5, 3.0e7):
         s = 1j * omega
         G = reference(s)
-        dense = 0.0
+        dense = coupled = 0.0
         for k, (K, D, M) in parts.items():
             sk = s - 1j * k * w
             A = G @ (K + sk * D + sk * sk * M)
             dense += np.linalg.norm(L.conj().T @ sla.solve_triangular(L, A.T, lower=True).T, 2)
-        kappa, _ = scan._energy(scan.factor(omega), s)
-        print(omega, kappa, dense)
+            # q_S: the band's displacement vectors through the loop, each in the energy norm
+            coupled += np.sum(np.linalg.norm(L.conj().T @ (A @ scan.Xq), axis=0))
+        kappa, qs = scan._energy(scan.factor(omega), s)
         assert kappa == pytest.approx(dense, rel=1e-5 if low_rank == 0 else 1e-7), omega
+        assert qs == pytest.approx(coupled, rel=1e-7), omega
 
 
 def test_band_decided_in_the_energy_norm_matches_the_dense_method(gearbox) -> None:

@@ -279,12 +279,22 @@ class Scan:
             mats = [table.get(k) for table in (system.K, system.D, system.M)]
             blocks = [None if x is None else sp.csr_array(x) for x in mats]
             self.parts[k] = (_nonzero_dofs(blocks), *blocks)
+        # harmonics touching many DOFs (a flat shaft): the band's left vectors on their own
+        # DOFs only (what the loop's forces and adjoint outputs reach), and the band's part
+        # of the block response G E_k X, W^H E_k X = P_K + s P_D + s^2 P_M (band x band)
+        self.many: dict[int, tuple[np.ndarray, np.ndarray, list[Any]]] = {}
+        for k, (Tk, *blocks) in self.parts.items():
+            if Tk.size > LOW_RANK:
+                WvH_T = np.ascontiguousarray(self.WvH[:, Tk])
+                proj = [None if b is None else WvH_T @ (b @ self.Xq)[Tk] for b in blocks]
+                self.many[k] = (WvH_T, np.ascontiguousarray(self.Wv[Tk]), proj)
         few = [Tk for Tk, *_ in self.parts.values() if 0 < Tk.size <= LOW_RANK]
         if not few:
             return
         U = np.unique(np.concatenate(few))
         self.JU = np.zeros((n, U.size))
         self.JU[U, np.arange(U.size)] = 1.0
+        self.WvH_U = np.ascontiguousarray(self.WvH[:, U])  # W^H J_U
         CU = solve(self.JU)[U]
         for k, (Tk, *blocks) in self.parts.items():
             if 0 < Tk.size <= LOW_RANK:
@@ -342,13 +352,13 @@ class Scan:
         and ``sum_k sum_m ||G_C(s) E_k x_m||_S`` over the band's displacement vectors."""
         assert self.weight is not None
         S, solve = self.weight
-        gc, gc_h = self._complement(lu, s)
+        c = 1.0 / (s - self.band.lam) - 1.0 / (s - self.sigma)
         kappa = qs = 0.0
         if self.low_rank:
             # E_k = J E^_k J^T on T_k within U: ||G_C E_k||_S^2 is the largest eigenvalue of
             # C_k E^H P E^ with P = (G_C J_U)^H S (G_C J_U) on T_k (C_k = J^T S^-1 J: the
             # smallest energy of a state with given values on T_k); q_S from the same P
-            GU = gc(self.JU)
+            GU = np.asarray(lu.solve(self.JU.astype(complex))) - self.Xq @ (c[:, None] * self.WvH_U)
             PU = GU.conj().T @ (S @ GU)
         for k, (Tk, K, D, M) in self.parts.items():
             if Tk.size == 0:
@@ -367,12 +377,42 @@ class Scan:
                 energy = np.sum(Y.conj() * (P @ Y), axis=0).real
             else:
                 E = _polynomial(K, D, M, sig, self.n)
-                kappa += norm_in(lambda x, E=E: gc(E @ x), lambda y, E=E: E.conj().T @ gc_h(y),
-                                 S, solve, self.n, self.rng)  # fmt: skip
-                Z = gc(E @ self.Xq)
+                apply, adjoint = self._loop(lu, s, k, E)
+                kappa += norm_in(apply, adjoint, S, solve, self.n, self.rng)
+                # G_C E_k X: the band's part from the precomputed projections
+                _, _, proj = self.many[k]
+                WEX = np.zeros((self.Xq.shape[1],) * 2, dtype=complex)
+                for part, factor in zip(proj, (1.0, sig, sig * sig), strict=True):
+                    if part is not None:
+                        WEX += factor * part
+                Z = np.asarray(lu.solve(np.asarray(E @ self.Xq, dtype=complex)))
+                Z -= self.Xq @ (c[:, None] * WEX)
                 energy = np.sum(Z.conj() * (S @ Z), axis=0).real
             qs += float(np.sum(np.sqrt(np.maximum(energy, 0.0))))
         return kappa, qs
+
+    def _loop(self, lu: Any, s: complex, k: int, E: Any) -> tuple[Any, Any]:
+        """``x -> G_C(s) E x`` and ``y -> E^H G_C(s)^H y`` for a harmonic touching many DOFs
+        ``T_k``: ``E x`` lives on ``T_k``, and ``E^H`` reads ``T_k`` only, so the band's left
+        vectors enter on ``T_k`` alone (:meth:`_complement` otherwise)."""
+        Tk = self.parts[k][0]
+        WvH_T, Wv_T, _ = self.many[k]
+        c = 1.0 / (s - self.band.lam) - 1.0 / (s - self.sigma)
+        cc = np.conj(c)
+        Xq, XqH, n = self.Xq, self.XqH, self.n
+        EH = sp.csr_array(E.conj().T)
+
+        def apply(x: np.ndarray) -> np.ndarray:
+            F = np.asarray(E @ x, dtype=complex)
+            return np.asarray(lu.solve(F)) - Xq @ (c * (WvH_T @ F[Tk]))
+
+        def adjoint(y: np.ndarray) -> np.ndarray:
+            y = np.asarray(y, dtype=complex)
+            g = np.zeros(n, dtype=complex)
+            g[Tk] = np.asarray(lu.solve(y, trans="H"))[Tk] - Wv_T @ (cc * (XqH @ y))
+            return np.asarray(EH @ g)
+
+        return apply, adjoint
 
     def _balanced(self, lu: Any, s: complex) -> tuple[float, float]:
         """``(kappa_C, q_S)`` at ``s`` in the Euclidean norm of the balanced first-order state
@@ -453,7 +493,8 @@ class Scan:
         norms = ("energy", "balanced") if self.weight is not None else ("balanced",)
         found = self.scan(top, stop, norms)
         out = min(found.values(), key=lambda c: (not c.complete, c.kappa))
-        out.p = self._p() if out.norm == "energy" else self._p_balanced()
+        if np.isfinite(out.beta):  # else the band's radii stay infinite: no coupling needed
+            out.p = self._p() if out.norm == "energy" else self._p_balanced()
         # the energy norm's band coordinates carry (lambda_j - sigma) / (s - sigma), at most
         # |lambda_j - sigma| / |sigma| for Re s >= 0: each radius grows by that factor
         out.rho = np.ones(self.band.lam.size)
