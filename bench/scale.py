@@ -169,12 +169,12 @@ def main() -> None:
 
 def _runup(model: object, rpm: list[float], workers: int = 1) -> tuple[str, str]:
     """The stability map over ``rpm`` (on ``workers`` processes): per speed its verdict (and
-    its CPU seconds when in this process), the map's wall time."""
+    its CPU seconds when in this process), the map's wall time and the workers' peak memory."""
     from rheolin.stability import stability_map
     from rheolin.study.run import MAP_PRECISION
 
     speeds = np.asarray(sorted(rpm)) * np.pi / 30
-    lines: list[str] = []
+    lines: dict[int, str] = {}
     last = [time.process_time()]
 
     def tick(i: int, res: object) -> None:
@@ -182,24 +182,38 @@ def _runup(model: object, rpm: list[float], workers: int = 1) -> tuple[str, str]
         band = getattr(res, "info", {}).get("band", {})
         state = "undecided" if not res.decided else ("stable" if res.stable else "unstable")
         cost = f"{now - last[0]:.0f} CPU s, " if workers == 1 else ""
-        lines.append(
+        lines[i] = (
             f"{speeds[i] * 30 / np.pi:g} rpm: {state}, {res.max_real:.6g} 1/s, "
             f"{cost}band {band.get('modes', '-')} modes "
             f"(kappa_C {band.get('kappa', float('nan')):.2f}, {band.get('norm', '-')} norm)"
         )
-        print(lines[-1], flush=True)
+        print(lines[i], flush=True)
         last[0] = now
 
     t0, wall = time.process_time(), time.perf_counter()
-    smap = stability_map(model, speeds, refine=MAP_PRECISION, progress=tick, workers=workers)
+    peaks = ""
+    if workers > 1:
+        from rheolin.study.executor import local_cluster
+
+        def worker_peak() -> float:  # MB, the worker process's high-water mark
+            with open("/proc/self/status") as f:
+                row = next(x for x in f if x.startswith("VmHWM:"))
+            return int(row.split()[1]) / 1024
+
+        with local_cluster(workers) as client:
+            smap = stability_map(model, speeds, refine=MAP_PRECISION, progress=tick, client=client)
+            mb = sorted(client.run(worker_peak).values())
+        peaks = ", worker peaks " + " / ".join(f"{x:.0f}" for x in mb) + " MB"
+    else:
+        smap = stability_map(model, speeds, refine=MAP_PRECISION, progress=tick)
     cpu, wall = time.process_time() - t0, time.perf_counter() - wall
     decided = int(np.sum(smap.decided))
-    where = f"{cpu:.0f} CPU s" if workers == 1 else f"{workers} workers, {wall:.0f} s wall"
+    where = f"{cpu:.0f} CPU s" if workers == 1 else f"{workers} workers, {wall:.0f} s wall{peaks}"
     return (
         f"run-up, {speeds.size} speeds",
         f"{where}, {decided} of {speeds.size} decided, "
         f"{int(smap.info.get('continued', 0))} continued from the previous speed, "
-        f"{len(smap.ranges)} unstable ranges: " + "; ".join(lines),
+        f"{len(smap.ranges)} unstable ranges: " + "; ".join(lines[i] for i in sorted(lines)),
     )
 
 

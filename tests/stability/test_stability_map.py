@@ -186,14 +186,17 @@ def test_map_on_workers_against_mathieu() -> None:
     mesh = model.speed_plan().mesh[0]
     H = rl.HarmonicSet(mesh * np.arange(0, 5))
     speeds = np.linspace(lo - 0.3 * (hi - lo), hi + 0.3 * (hi - lo), 6)
-    seen: list[int] = []
+    seen: list[tuple[int, float]] = []
     smap = stability_map(
-        model, speeds, harmonics=H, refine=1e-6, workers=2, progress=lambda i, r: seen.append(i)
-    )
+        model, speeds, harmonics=H, refine=1e-6, workers=2,
+        progress=lambda i, r: seen.append((i, r.max_real)),
+    )  # fmt: skip
     (r,) = smap.ranges
     assert r.lower == pytest.approx(lo, rel=2e-5), (r.lower, lo)
     assert r.upper == pytest.approx(hi, rel=2e-5), (r.upper, hi)
-    assert sorted(seen) == list(range(speeds.size))
+    # each speed reported once, with its result
+    assert [i for i, _ in sorted(seen)] == list(range(speeds.size))
+    assert [x for _, x in sorted(seen)] == smap.max_real.tolist()
     alone = stability_map(model, speeds, harmonics=H, refine=1e-6)
     assert smap.state.tolist() == alone.state.tolist()
     np.testing.assert_allclose(smap.max_real, alone.max_real, rtol=1e-9, atol=1e-9)

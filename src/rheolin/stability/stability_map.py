@@ -263,7 +263,8 @@ def stability_map(
         (:func:`~rheolin.stability.verdicts.blocks_of`: the runs that are continued from
         speed to speed apart, the longest halved until there are two blocks per worker),
         each continued within itself, and each worker gets its share of the memory budget;
-        ``progress`` is then called as each block ends. 1 (default): in this process. The
+        ``progress`` is then called as each speed's verdict ends on its worker (or, where
+        that report is late, as its block ends). 1 (default): in this process. The
         range bounds are refined here afterwards.
     client
         A ``distributed.Client`` to run the blocks on instead (``workers`` is then ignored).

@@ -5,6 +5,7 @@ blocks on worker processes."""
 from __future__ import annotations
 
 import functools
+import pickle
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -31,6 +32,9 @@ __all__ = [
 #: finer lattice then cannot settle (docs/stability.md, section 5).
 CONTINUED_STEP = 0.02
 
+#: Seconds between looks at the workers' progress events while a map's blocks run.
+EVENT_POLL = 0.2
+
 
 @dataclass(frozen=True)
 class Verdicts:
@@ -45,6 +49,7 @@ class Verdicts:
     memory_budget: Any = None
     rtol: float | None = None
     key: str = ""  # a map's tasks share their model's speed template in a worker
+    offset: int = 0  # the map's index of the first of ``speeds`` (a block on a worker)
 
     def evaluator(self) -> Callable[..., tuple[Any, FloquetResult]]:
         """``evaluate(W, continuation, accuracy, lattice_order)``: the model assembled at
@@ -165,8 +170,30 @@ def blocks_of(speeds: np.ndarray, count: int) -> list[np.ndarray]:
 
 
 def verdict_block(task: Verdicts) -> tuple[list[FloquetResult], int]:
-    """A worker's task: the verdicts of one block of a map's speeds (:func:`continued_verdicts`)."""
-    return continued_verdicts(task, task.evaluator())
+    """A worker's task: the verdicts of one block of a map's speeds (:func:`continued_verdicts`),
+    each reported as it ends on the map's event topic (:func:`_topic`) when on a Dask worker."""
+    return continued_verdicts(task, task.evaluator(), _reporter(task))
+
+
+def _topic(key: str) -> str:
+    return f"rheolin-map-{key}"
+
+
+def _reporter(task: Verdicts) -> Callable[[int, FloquetResult], None] | None:
+    """``report(i, result)`` as a Dask event of the worker this runs on (the map's index and the
+    pickled result: events travel as msgpack), None outside a worker."""
+    try:
+        from distributed import get_worker
+
+        worker = get_worker()
+    except (ImportError, ValueError):  # no Dask, or not on a worker
+        return None
+    topic = _topic(task.key)
+
+    def report(i: int, res: FloquetResult) -> None:
+        worker.log_event(topic, {"index": task.offset + i, "result": pickle.dumps(res)})
+
+    return report
 
 
 def in_parallel(
@@ -175,8 +202,11 @@ def in_parallel(
     client: Any,
     progress: Callable[[int, FloquetResult], None] | None,
 ) -> tuple[list[FloquetResult], int]:
-    """The verdicts of ``task.speeds`` in contiguous blocks on worker processes."""
+    """The verdicts of ``task.speeds`` in contiguous blocks on worker processes; ``progress``
+    is called for each speed as its verdict ends (the workers' events), else, where an event
+    is late, as its block ends."""
     import contextlib
+    import queue
     import uuid
     from dataclasses import replace
 
@@ -192,23 +222,49 @@ def in_parallel(
     key = uuid.uuid4().hex
     results: list[FloquetResult | None] = [None] * speeds.size
     continued = 0
+    reported: set[int] = set()
+    events: queue.SimpleQueue[Any] = queue.SimpleQueue()
+
+    def report(i: int, res: FloquetResult) -> None:
+        if progress is not None and i not in reported:
+            reported.add(i)
+            progress(i, res)
+
+    def drain() -> None:
+        while True:
+            try:
+                msg = events.get_nowait()
+            except queue.Empty:
+                return
+            report(int(msg["index"]), pickle.loads(msg["result"]))
+
     context = contextlib.nullcontext(client) if client is not None else local_cluster(n)
     with context as c:
         ex = DaskExecutor(c)
-        running = {}
-        for b in blocks:
-            part = replace(task, speeds=speeds[b], memory_budget=share, key=key)
-            running[ex.submit(verdict_block, part)] = b
-        while running:
-            handle, out, error = ex.next_done()
-            b = running.pop(handle)
-            if error is not None:
-                ex.cancel()
-                raise error
-            found, k = out
-            continued += k
-            for i, res in zip(b, found, strict=True):
-                results[int(i)] = res
-                if progress is not None:
-                    progress(int(i), res)
+        if progress is not None:  # events arrive on the client's thread: queued for this one
+            c.subscribe_topic(_topic(key), lambda event: events.put(event[1]))
+        try:
+            running = {}
+            for b in blocks:
+                part = replace(task, speeds=speeds[b], memory_budget=share, key=key,
+                               offset=int(b[0]))  # fmt: skip
+                running[ex.submit(verdict_block, part)] = b
+            while running:
+                while not ex.ready(timeout=EVENT_POLL):
+                    drain()
+                drain()
+                handle, out, error = ex.next_done()
+                b = running.pop(handle)
+                if error is not None:
+                    ex.cancel()
+                    raise error
+                found, k = out
+                continued += k
+                for i, res in zip(b, found, strict=True):
+                    results[int(i)] = res
+                    report(int(i), res)
+        finally:
+            if progress is not None:
+                with contextlib.suppress(Exception):
+                    c.unsubscribe_topic(_topic(key))
     return [r for r in results if r is not None], continued

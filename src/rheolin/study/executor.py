@@ -142,6 +142,16 @@ class DaskExecutor:
         self._done.add(future)
         return future.key
 
+    def ready(self, timeout: float) -> bool:
+        """Whether a task has ended (waiting up to ``timeout`` seconds for one)."""
+        from distributed import wait
+
+        if self._done.has_ready() or not self._futures:
+            return True
+        with contextlib.suppress(TimeoutError):
+            wait(list(self._futures.values()), timeout=timeout, return_when="FIRST_COMPLETED")
+        return self._done.has_ready()
+
     def next_done(self) -> tuple[Any, Any, BaseException | None]:
         future = next(self._done)
         self._futures.pop(future.key, None)
