@@ -35,9 +35,11 @@ from .averaged import MAX_AVERAGED_DENSE, Averaged
 from .complement import (
     DENSE_TOUCHED,
     KAPPA_LIMIT,
+    LOW_RANK,
     Complement,
     Scan,
     energy_certificate,
+    harmonic_dofs,
     touched_dofs,
 )
 from .result import EPS
@@ -326,6 +328,8 @@ def band_memory(system: PeriodicSystem, modes: int = BAND_MODES) -> int:
     # blocks of the band's width: the balanced norm's above DENSE_TOUCHED, the energy norm's
     # responses of the band's vectors and their dual norms (complement.Scan) always
     blocks = (4 if touched > DENSE_TOUCHED else 0) * n * modes * 16 + 6 * n * modes * 16
+    # the band's left vectors on the DOFs of each harmonic touching many (a flat shaft), twice
+    blocks += sum(2 * t * modes * 16 for t in harmonic_dofs(system) if t > LOW_RANK)
     scan = n * dense * 16 + nnz * LU_FILL * 16 + (2 * dense) ** 2 * 16 * 4 + blocks
     return int(
         nnz * LU_FILL * 16 + 2 * (2 * n) * ncv * 8 + band_vectors(system, modes) + scan + 32 * 2**20

@@ -39,6 +39,7 @@ __all__ = [
     "Scan",
     "energy_certificate",
     "energy_radius",
+    "harmonic_dofs",
     "touched_dofs",
 ]
 
@@ -115,6 +116,15 @@ def touched_dofs(system: PeriodicSystem) -> np.ndarray:
     return _nonzero_dofs(
         x for table in (system.K, system.D, system.M) for k, x in table.items() if k != 0
     )
+
+
+def harmonic_dofs(system: PeriodicSystem) -> list[int]:
+    """How many DOFs each coefficient harmonic ``k != 0`` touches (rows and columns of its
+    ``K_k, D_k, M_k``)."""
+    return [
+        _nonzero_dofs(table.get(k) for table in (system.K, system.D, system.M)).size
+        for k in system.coefficient_harmonics
+    ]
 
 
 def _nonzero_dofs(matrices: Any) -> np.ndarray:
