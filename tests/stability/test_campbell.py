@@ -209,15 +209,37 @@ def test_critical_speed_map_limits_and_the_campbell_crossings() -> None:
     )
     assert len(fwd) == 2
     np.testing.assert_allclose(r.speeds[0, :2], fwd, rtol=2e-4)
-    L, d, E, rho = 1.0, 0.02, 210e9, 7850.0
+    stiff = critical_speed_map(_plain_shaft(21, 1e6), [1e11]).speeds[0, 0]
+    assert 0.995 * PINNED[0] < stiff < PINNED[0]
+
+
+#: A plain steel shaft (length, diameter, modulus, density) and its pinned-pinned
+#: Euler-Bernoulli critical speeds (j pi / L)^2 sqrt(EI / rho A), j = 1..4.
+L_S, D_S, E_S, RHO_S = 1.0, 0.02, 210e9, 7850.0
+PINNED = (np.arange(1, 5) * np.pi / L_S) ** 2 * np.sqrt(
+    E_S * (np.pi * D_S**4 / 64) / (RHO_S * np.pi * D_S * D_S / 4)
+)
+
+
+def _plain_shaft(nodes: int, k: float) -> Model:
     shaft = Model()
-    shaft.add_shaft("s", np.linspace(0.0, L, 21), outer_diameter=d, elastic_modulus=E,
-                    density=rho, poisson_ratio=0.3)  # fmt: skip
-    for node in (0, 20):
-        shaft.add_bearing(f"b{node}", "s", node, stiffness=1e6)
-    stiff = critical_speed_map(shaft, [1e11]).speeds[0, 0]
-    eb = (np.pi / L) ** 2 * np.sqrt(E * (np.pi * d**4 / 64) / (rho * np.pi * d * d / 4))
-    assert 0.995 * eb < stiff < eb
+    shaft.add_shaft("s", np.linspace(0.0, L_S, nodes), outer_diameter=D_S, elastic_modulus=E_S,
+                    density=RHO_S, poisson_ratio=0.3)  # fmt: skip
+    for node in (0, nodes - 1):
+        shaft.add_bearing(f"b{node}", "s", node, stiffness=k)
+    return shaft
+
+
+def test_fine_shaft_criticals_tend_to_the_pinned_pinned_beam() -> None:
+    """The plain shaft at 401 nodes (2,406 DOF: the critical speeds by shift-invert Arnoldi)
+    on stiff bearings: its first four critical speeds lie just below the pinned-pinned
+    Euler-Bernoulli values (shear and rotary inertia lower them, more for higher ``j``)."""
+    from rheolin.stability.critical_map import synchronous_critical_speeds
+
+    ratio = synchronous_critical_speeds(_plain_shaft(401, 1e11), 4) / PINNED
+    j = np.arange(1, 5)
+    assert np.all(ratio < 1.0) and np.all(ratio > 1.0 - 5e-4 * j**2), ratio
+    assert np.all(np.diff(ratio) < 0), ratio
 
 
 def test_critical_speed_map_refuses_speed_dependent_bearings() -> None:

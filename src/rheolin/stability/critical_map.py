@@ -33,6 +33,8 @@ from typing import Any
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from ..errors import ModelError
 from ..mechanics.rotation import transverse_basis
@@ -101,35 +103,79 @@ class CriticalSpeedMap:
 def _averaged_parts(model: Any) -> tuple[Any, ...]:
     """``(M, K_0, K_2, G, T, assembled)`` of the time-averaged system, by speed
     (``K = K_0 + W K_1 + W^2 K_2``, ``D = D_0 + W G``) from three assemblies, reduced by
-    ``T`` when the model has a free axial or torsional motion (held: no critical speed at 0)."""
+    ``T`` when the model has a free axial or torsional motion (held: no critical speed at 0);
+    sparse (CSC)."""
     from ..system.rigid_modes import find_rigid_modes
 
     W = np.array([1.0, 2.0, 3.0])
     built = [model.assemble(float(w)) for w in W]
     mats = [b.system for b in built]
 
-    def dense(s: Any, name: str) -> np.ndarray:
+    def part(s: Any, name: str) -> sp.csc_array:
         x = getattr(s, name).get(0)
-        if x is None:
-            return np.zeros((s.n, s.n))
-        return np.asarray(x.toarray() if hasattr(x, "toarray") else x)
+        return sp.csc_array((s.n, s.n)) if x is None else sp.csc_array(x)
 
     link = mats[0].constraint
-    Tc = np.eye(mats[0].n) if link is None else link.transform().toarray()
+    Tc = sp.identity(mats[0].n, format="csr") if link is None else link.transform()
     if link is not None:  # rigid links: eliminated
         mats = [link.reduce(s) for s in mats]
-    M = dense(mats[0], "M")
-    K = [dense(s, "K") for s in mats]
-    D = [dense(s, "D") for s in mats]
+    M = part(mats[0], "M")
+    K = [part(s, "K") for s in mats]
+    D = [part(s, "D") for s in mats]
     rigid = find_rigid_modes(mats[0])
-    T = np.eye(M.shape[0]) if rigid is None else rigid.transform().toarray()
+    T = sp.identity(M.shape[0], format="csr") if rigid is None else sp.csr_array(rigid.transform())
     M, K, D = T.T @ M @ T, [T.T @ k @ T for k in K], [T.T @ d @ T for d in D]
-    T = Tc @ T  # from the reduced coordinates to every DOF
-    V = np.vander(W, 3, increasing=True)  # [1, W, W^2]
-    coef = np.linalg.solve(V, np.stack([k.ravel() for k in K]))
-    K0, K2 = coef[0].reshape(M.shape), coef[2].reshape(M.shape)
-    G = (D[1] - D[0]) / (W[1] - W[0])
-    return M, K0, K2, G, T, built[0]
+    T = sp.csr_array(Tc @ T)  # from the reduced coordinates to every DOF
+    c = np.linalg.inv(np.vander(W, 3, increasing=True))  # rows: [1, W, W^2] coefficients
+    K0 = sp.csc_array(sum(c[0, i] * K[i] for i in range(3)))
+    K2 = sp.csc_array(sum(c[2, i] * K[i] for i in range(3)))
+    G = sp.csc_array((D[1] - D[0]) / (W[1] - W[0]))
+    return sp.csc_array(M), K0, K2, G, T, built[0]
+
+
+#: Up to this many unknowns the pencil's roots all come by QZ (dense); above, the lowest by
+#: shift-invert Arnoldi on a sparse LU of ``K_0`` (:func:`_lowest_roots`), their number
+#: doubled while they hold fewer critical speeds than asked, up to ``MAX_ROOTS`` (a model
+#: whose lowest roots mostly do not whirl then has the critical speeds below its
+#: ``MAX_ROOTS``-th root only).
+DENSE_CRITICAL = 600
+MAX_ROOTS = 512
+
+
+def _norm1(A: Any) -> float:
+    return float(abs(A).sum(axis=0).max(initial=0.0)) if A.shape[0] else 0.0
+
+
+def _all_roots(K0: Any, B: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Every root ``W^2`` of ``(K_0 - W^2 B) x = 0`` and its vector, by QZ."""
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        mu, X = sla.eig(K0.toarray(), B.toarray())
+    return mu, X
+
+
+def _lowest_roots(K0: Any, B: Any, k: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """The ``k`` roots ``W^2`` of ``(K_0 - W^2 B) x = 0`` nearest a shift ``sigma <= 0`` (0, or
+    just below where ``K_0`` is singular) and their vectors, by Arnoldi on
+    ``(K_0 - sigma B)^-1 B``; with ``r`` the largest ``|W^2 - sigma|`` among them: every root
+    closer than ``r`` to ``sigma`` is one of them."""
+    n = K0.shape[0]
+    scale = _norm1(K0) / max(_norm1(B), 1e-300)
+    for sigma in (0.0, -1e-6 * scale, -1e-3 * scale):
+        try:
+            lu = spla.splu(sp.csc_array(K0 - sigma * B).astype(complex))
+        except RuntimeError:  # exactly singular
+            continue
+        break
+    else:
+        raise ModelError("critical speeds: the time-averaged stiffness is singular")
+    op = spla.LinearOperator((n, n), matvec=lambda x: lu.solve(B @ x), dtype=complex)
+    v0 = np.random.default_rng(7).standard_normal(n) + 0j
+    theta, X = spla.eigs(op, k=k, which="LM", ncv=min(n - 1, max(2 * k + 1, 40)), tol=1e-13,
+                         v0=v0)  # fmt: skip
+    with np.errstate(divide="ignore"):
+        mu = sigma + 1.0 / theta
+    radius = float(np.max(np.abs(mu - sigma)))
+    return mu, X, radius
 
 
 #: Critical speeds closer than this (relative) are one: the two planes of an isotropic rotor.
@@ -140,7 +186,9 @@ def synchronous_critical_speeds(model: Any, n_modes: int = 4) -> np.ndarray:
     """The lowest undamped forward synchronous critical speeds [rad/s] of ``model`` (its
     damping and circulatory terms left out; see the module docstring).
 
-    The eigenvalues ``W^2`` of the pencil come by QZ; those within ``1e-10 ||K_0|| / ||B||``
+    The eigenvalues ``W^2`` of the pencil come by QZ (above :data:`DENSE_CRITICAL`
+    unknowns: the lowest, by shift-invert Arnoldi on a sparse LU, as many as the critical
+    speeds asked need); those within ``1e-10 ||K_0|| / ||B||``
     of zero are rigid-body motions (a free axial or torsional motion) and left out, and so
     are solutions that unbalance does not excite: a torsional or axial mode (no whirl), and
     a backward branch crossing the 1x line (whirl ratio at most ``-WHIRL_THRESHOLD``, as
@@ -154,45 +202,72 @@ def synchronous_critical_speeds(model: Any, n_modes: int = 4) -> np.ndarray:
     the translation splits into ``sqrt(2 k_x / m)`` and ``sqrt(2 k_y / m)``.
     """
     M, K0, K2, G, T, built = _averaged_parts(model)
-    B = M - 1j * G - K2
-    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        mu, X = sla.eig(K0, B)
-    zero = 1e-10 * float(np.linalg.norm(K0, 1)) / max(float(np.linalg.norm(B, 1)), 1e-300)
-    ok = np.isfinite(mu) & (mu.real > zero) & (np.abs(mu.imag) <= 1e-6 * np.abs(mu))
-    mu, X = mu[ok].real, X[:, ok]
-    order = np.argsort(mu)
-    mu, X = mu[order], T @ X[:, order]
+    B = sp.csc_array(M - 1j * G - K2)
+    zero = 1e-10 * _norm1(K0) / max(_norm1(B), 1e-300)
     F, Bk = _whirl_maps(model, built)
+    n = K0.shape[0]
+    k = min(max(4 * n_modes + 8, 24), n - 2)
+    while True:
+        if n <= DENSE_CRITICAL:  # every root
+            mu, X = _all_roots(K0, B)
+            top = float("inf")
+        else:  # the lowest k: a root group is judged only when it lies wholly below the top
+            mu, X, radius = _lowest_roots(K0, B, k)
+            top = radius * (1 - 4 * SAME)
+        ok = np.isfinite(mu) & (mu.real > zero) & (np.abs(mu.imag) <= 1e-6 * np.abs(mu))
+        mu, X = mu[ok].real, X[:, ok]
+        order = np.argsort(mu)
+        mu, X = mu[order], T @ X[:, order]
+        out = _forward_criticals(mu, X, F, Bk, n_modes, top)
+        if len(out) >= n_modes or not np.isfinite(top) or k >= MAX_ROOTS:
+            return np.array(out)
+        k = min(2 * k, n - 2, MAX_ROOTS)
+
+
+def _forward_criticals(
+    mu: np.ndarray, X: np.ndarray, F: Any, Bk: Any, n_modes: int, top: float
+) -> list[float]:
+    """The critical speeds among the ascending roots ``mu`` (vectors ``X``) below ``top``:
+    each group of (nearly) equal roots judged by its most forward combination."""
     out: list[float] = []
     i = 0
     while i < mu.size and len(out) < n_modes:
         j = i + 1
         while j < mu.size and mu[j] <= mu[i] * (1 + 2 * SAME):
             j += 1
+        if mu[j - 1] >= top:  # a group the roots found may cut: the next, larger run judges it
+            break
         V = X[:, i:j]
         f, b = F @ V, Bk @ V
         Af, Ab = f.conj().T @ f, b.conj().T @ b
         # whirl ratios of the combinations that whirl at all: the pencil (Af - Ab, Af + Ab)
         # on the range of Af + Ab (a coincident axial or torsional root adds no whirl)
+        # (whirl energy against the shapes' own size: a root that does not whirl, computed
+        # by Arnoldi, carries rounding's 1e-25 of it, which must not count as a whirl)
         w, U = np.linalg.eigh(0.5 * (Af + Ab + (Af + Ab).conj().T))
-        live = w > 1e-10 * max(float(w.max(initial=0.0)), 1e-300)
+        size = float(np.sum(np.abs(V) ** 2))
+        live = w > 1e-10 * max(float(w.max(initial=0.0)), size, 1e-300)
         if live.any():
             P = U[:, live] / np.sqrt(w[live])
             D = P.conj().T @ (Af - Ab) @ P
             if np.linalg.eigvalsh(0.5 * (D + D.conj().T)).max() > -WHIRL_THRESHOLD:
                 out.append(float(np.sqrt(mu[i])))
         i = j
-    return np.array(out)
+    return out
 
 
-def _whirl_maps(model: Any, built: Any) -> tuple[np.ndarray, np.ndarray]:
+def _whirl_maps(model: Any, built: Any) -> tuple[sp.csr_array, sp.csr_array]:
     """Linear maps from a shape to its forward and backward circles, node by node (the
     transverse translations and tilts of spinning bodies; :func:`~rheolin.stability.modes.
-    whirl_ratio` is ``(|F x|^2 - |B x|^2) / (|F x|^2 + |B x|^2)``)."""
+    whirl_ratio` is ``(|F x|^2 - |B x|^2) / (|F x|^2 + |B x|^2)``); sparse, three entries a
+    row."""
     labels = built.dof_labels
     index = {lab: i for i, lab in enumerate(labels)}
-    rows_f: list[np.ndarray] = []
-    rows_b: list[np.ndarray] = []
+    rows: list[int] = []
+    cols: list[int] = []
+    fwd: list[complex] = []
+    bwd: list[complex] = []
+    count = 0
     for body, node in sorted({(b, i) for b, i, _ in labels}):
         s = built.plan.spin.get(body, 0)
         if s == 0:
@@ -202,19 +277,19 @@ def _whirl_maps(model: Any, built: Any) -> tuple[np.ndarray, np.ndarray]:
             found = [index.get((body, node, c)) for c in kind]
             if any(r is None for r in found):
                 continue
-            rf = np.zeros(len(labels), complex)
-            rb = np.zeros(len(labels), complex)
-            cols = [int(r) for r in found if r is not None]
-            rf[cols] = a + 1j * b
-            rb[cols] = a - 1j * b
+            f, g = a + 1j * b, a - 1j * b
             if s < 0:
-                rf, rb = rb, rf
-            rows_f.append(rf)
-            rows_b.append(rb)
-    if not rows_f:
-        z = np.zeros((0, len(labels)), complex)
-        return z, z
-    return np.array(rows_f), np.array(rows_b)
+                f, g = g, f
+            rows += [count] * 3
+            cols += [int(r) for r in found if r is not None]
+            fwd += f.tolist()
+            bwd += g.tolist()
+            count += 1
+    shape = (count, len(labels))
+    return (
+        sp.csr_array((np.array(fwd, complex), (rows, cols)), shape=shape),
+        sp.csr_array((np.array(bwd, complex), (rows, cols)), shape=shape),
+    )
 
 
 def _ground_bearings(model: Any) -> list[str]:
