@@ -236,16 +236,111 @@ class FloquetResult:
         band = self.info.get("band")
         if band and not band.get("certified", False):
             return False, none
+        certified = self.info.get("certified", np.zeros(lam.size, bool))
+        if np.any(unresolved & ~certified):
+            return False, none
+        blocking = self._truncation_blocking()
+        return not bool(np.any(blocking)), blocking
+
+    def _truncation_blocking(self) -> np.ndarray:
+        """Lattice method, a stable verdict: the exponents whose truncation estimate reaches
+        the axis (four times nearer where a pair may split into a real pair), not certified
+        by their discs."""
+        lam, tol = self.exponents, self.tolerances
+        reach = TRUNCATION_SAFETY * self.truncation
         gap = self.info.get("split_gap", np.full(lam.size, np.inf))
         near_split = gap < 2.0 * reach
         loose = self.truncation > tol
         certified = self.info.get("certified", np.zeros(lam.size, bool))
-        if np.any(unresolved & ~certified):
-            return False, none
         split_clear = lam.real + SPLIT_FACTOR * (reach + gap) < 0
         clear = np.where(near_split, split_clear, lam.real + reach < 0)
-        blocking = loose & ~clear & ~certified
-        return not bool(np.any(blocking)), blocking
+        return np.asarray(loose & ~clear & ~certified)
+
+    def open_reason(self, most: int = 3) -> str:
+        """Why the verdict is not decided, naming (up to ``most``) the exponents that keep it
+        open, by real part, the uncertainty that reaches the axis and frequency, and what to
+        change; ``""`` when it is decided.
+
+        >>> import numpy as np
+        >>> r = floquet_result(np.array([-0.5 + 100j]), np.array([1e-12]), np.array([0.5]),
+        ...                    10.0, "dense")
+        >>> r.decided, r.open_reason().split(": ")[1].split(". ")[0]
+        (False, '-0.5 +- 707 1/s at 15.92 Hz')
+        """
+        if self.decided:
+            return ""
+        if self.method == "failed":
+            return str(self.info.get("error", "the check failed"))
+        lam = self.exponents
+        advice = (
+            "To decide: more harmonics (a finer lattice; the memory budget "
+            "RHEOLIN_MEMORY_BUDGET bounds it), damping where it is physical, or a coarser or "
+            "condensed model of the bodies those modes live in"
+        )
+        if self.method != "lattice":
+            weight = self.edge_weight if self.edge_weight.size == lam.size else np.ones(lam.size)
+            reach = DECIDE_SAFETY * np.sqrt(weight) * np.maximum(np.abs(lam), self.omega)
+            half = 0.5 * self.omega  # as `decided`: near Im = 0 or w1/2, four times nearer
+            near_split = np.abs(lam.imag / half - np.round(lam.imag / half)) * half < reach
+            factor = np.where(near_split, SPLIT_FACTOR, 1.0)
+            rows = np.flatnonzero((weight > EDGE_TOL) & (lam.real + factor * reach >= 0))
+            what = (
+                "exponents not converged in the truncation, whose error estimate reaches the axis"
+            )
+            return f"{self._listed(what, rows, reach, most)}. {advice}"
+        if not self.complete:
+            return (
+                f"the lattice search found {lam.size} exponents where the time-averaged system "
+                f"has {int(self.info.get('expected', 0)) or 'more'}. {advice}"
+            )
+        band = self.info.get("band")
+        if band and not band.get("certified", False):
+            return str(band.get("reason") or "the modes the band leaves out are not bounded")
+        unresolved = self.info.get("unresolved", np.zeros(lam.size, bool))
+        certified = self.info.get("certified", np.zeros(lam.size, bool))
+        if self.stable:
+            rows_open = np.flatnonzero(self._truncation_blocking() & ~unresolved)
+        else:  # growing exponents within their truncation uncertainty of the axis
+            rows_open = np.flatnonzero((lam.real > self.tolerances) & ~unresolved)
+        parts = [
+            self._listed(
+                "exponents the lattice does not resolve, the Gershgorin discs of their modes "
+                "reaching the axis", np.flatnonzero(unresolved & ~certified), None, most,
+            ),
+            self._listed(
+                "exponents whose truncation uncertainty reaches the axis", rows_open,
+                TRUNCATION_SAFETY * self.truncation, most,
+            ),
+        ]  # fmt: skip
+        parts = [p for p in parts if p]
+        order = self.lattice.order if self.lattice is not None else "?"
+        if not parts:
+            return (
+                f"the exponents' sum is off Liouville's identity by more than their "
+                f"uncertainties at lattice order {order}. {advice}"
+            )
+        return f"at lattice order {order}, " + "; ".join(parts) + f". {advice}"
+
+    def _listed(self, what: str, rows: np.ndarray, spread: Any, most: int) -> str:
+        """``what: re +- spread 1/s at f Hz, ...`` for ``rows`` (largest real part first, a
+        complex pair or a folded copy named once, at most ``most``); ``""`` for no row."""
+        lam = self.exponents
+        named: list[int] = []
+        for i in rows[np.argsort(-lam.real[rows], kind="stable")]:
+            key = (round(float(lam[i].real), 9), round(float(abs(lam[i].imag)), 6))
+            if key not in {(round(float(lam[j].real), 9), round(float(abs(lam[j].imag)), 6))
+                           for j in named}:  # fmt: skip
+                named.append(int(i))
+        if not named:
+            return ""
+        listed = ", ".join(
+            f"{lam[i].real:.4g}"
+            + ("" if spread is None else f" +- {spread[i]:.3g}")
+            + f" 1/s at {abs(lam[i].imag) / (2 * np.pi):.4g} Hz"
+            for i in named[:most]
+        )
+        more = f" and {len(named) - most} more" if len(named) > most else ""
+        return f"{what}: {listed}{more}"
 
     @property
     def leading(self) -> complex:

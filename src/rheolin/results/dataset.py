@@ -61,6 +61,8 @@ def floquet_attrs(sol: Solution) -> dict[str, Any]:
     if res.lattice is not None:
         out["floquet_lattice_order"] = int(res.lattice.order)
         out["floquet_lattice_size"] = len(res.lattice)
+    if not res.decided:  # what keeps it open and what to change
+        out["stability_open"] = res.open_reason()
     if "stability_mechanism" in sol.info:
         out["stability_mechanism"] = str(sol.info["stability_mechanism"])
     return out

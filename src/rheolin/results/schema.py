@@ -26,22 +26,23 @@ class Verdict:
 
 def point_verdict(summary: dict[str, Any]) -> Verdict:
     """The verdict of one operating point from its summary: ``ok`` when the solution
-    converged and is not unstable; ``notes`` say what is uncertain (an undecided stability
-    verdict, a truncated harmonic set).
+    converged and its stability is not unstable or undecided; ``notes`` say what is uncertain
+    (an undecided stability verdict and why, a truncated harmonic set).
 
-    >>> point_verdict({"success": True, "stability_decided": False}).notes[0][:22]
-    'stability is UNDECIDED'
+    >>> v = point_verdict({"success": True, "stability": "undecided", "stability_decided": False})
+    >>> v.ok, v.notes[0][:22]
+    (False, 'stability is UNDECIDED')
     """
     notes = []
     if summary.get("stability_decided") is False:
-        notes.append(
-            "stability is UNDECIDED: the Floquet truncation could still flip the verdict "
-            "(docs/stability.md)"
-        )
+        why = summary.get("stability_open") or "the Floquet truncation could still flip the verdict"
+        notes.append(f"stability is UNDECIDED: {why} (docs/stability.md)")
     elif summary.get("stability") == "undecided":
         notes.append(
             "stability is UNDECIDED: the largest Floquet real part is zero within its "
             "tolerance (an undamped motion; add its damping to decide; docs/stability.md)"
         )
     notes += [str(w) for w in summary.get("warnings", [])]
-    return Verdict(bool(summary.get("success")), notes)
+    # an undecided stability verdict is not a pass (docs/cli.md, exit codes)
+    ok = bool(summary.get("success")) and summary.get("stability") != "undecided"
+    return Verdict(ok, notes)

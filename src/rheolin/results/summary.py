@@ -58,7 +58,7 @@ def summarize(ds: xr.Dataset) -> dict[str, Any]:
     keys += ("rtol", "stability", "max_floquet_real", "max_floquet_real_uncertainty")
     keys += ("stability_decided", "floquet_method", "floquet_lattice_order", "floquet_lattice_size")
     keys += ("leading_exponent_real", "leading_exponent_frequency_hz", "floquet_seconds")
-    keys += ("stability_mechanism",)
+    keys += ("stability_mechanism", "stability_open")
     keys += ("harmonic_count", "closure_order", "max_order", "n_dof", "model_sha256")
     out: dict[str, Any] = {"schema": "rheolin.summary", "schema_version": SCHEMA_VERSION}
     out.update({k: _plain(ds.attrs.get(k)) for k in keys})
