@@ -282,6 +282,7 @@ class Scan:
         # C_k = J^T S^-1 J, with one set of responses G_C(s) J_U per point on the union U
         self.low_rank: dict[int, tuple[np.ndarray, list[Any], np.ndarray]] = {}
         self.JU = np.zeros((n, 0))  # unit forces on the union U of those T_k
+        self.WvH_U = np.zeros((band.lam.size, 0), dtype=complex)  # W^H J_U
         if self.weight is None:
             return
         _, solve = self.weight
@@ -304,7 +305,7 @@ class Scan:
         U = np.unique(np.concatenate(few))
         self.JU = np.zeros((n, U.size))
         self.JU[U, np.arange(U.size)] = 1.0
-        self.WvH_U = np.ascontiguousarray(self.WvH[:, U])  # W^H J_U
+        self.WvH_U = np.ascontiguousarray(self.WvH[:, U])
         CU = solve(self.JU)[U]
         for k, (Tk, *blocks) in self.parts.items():
             if 0 < Tk.size <= LOW_RANK:
@@ -339,23 +340,6 @@ class Scan:
             return self._lu(Q)
         except RuntimeError:
             return None
-
-    def _complement(self, lu: Any, s: complex) -> tuple[Any, Any]:
-        """``G_C(s)`` and its adjoint as functions of a force (``n``) or a block (``n x m``):
-        ``G(s)`` minus the band's ``x_j w_j^H (1/(s - lambda_j) - 1/(s - sigma))``,
-        ``sigma = -SPLIT * radius``."""
-        c = 1.0 / (s - self.band.lam) - 1.0 / (s - self.sigma)
-        Xq, Wv, XqH, WvH = self.Xq, self.Wv, self.XqH, self.WvH
-
-        def gc(F: np.ndarray) -> np.ndarray:
-            F = np.asarray(F, dtype=complex)
-            return np.asarray(lu.solve(F)) - Xq @ (c * (WvH @ F).T).T
-
-        def gc_h(Y: np.ndarray) -> np.ndarray:
-            Y = np.asarray(Y, dtype=complex)
-            return np.asarray(lu.solve(Y, trans="H")) - Wv @ (np.conj(c) * (XqH @ Y).T).T
-
-        return gc, gc_h
 
     def _energy(self, lu: Any, s: complex) -> tuple[float, float]:
         """``(kappa_C, q_S)`` at ``s`` in the energy norm: ``sum_k ||G_C(s) E_k(s - i k w1)||_S``
@@ -402,9 +386,11 @@ class Scan:
         return kappa, qs
 
     def _loop(self, lu: Any, s: complex, k: int, E: Any) -> tuple[Any, Any]:
-        """``x -> G_C(s) E x`` and ``y -> E^H G_C(s)^H y`` for a harmonic touching many DOFs
-        ``T_k``: ``E x`` lives on ``T_k``, and ``E^H`` reads ``T_k`` only, so the band's left
-        vectors enter on ``T_k`` alone (:meth:`_complement` otherwise)."""
+        """``x -> G_C(s) E x`` and ``y -> E^H G_C(s)^H y`` for a harmonic ``k`` touching many
+        DOFs ``T_k`` (``E`` its coupling at ``s``, ``lu`` the factor of ``Q0(s)``). ``G_C(s)``
+        is ``G(s)`` minus the band's ``x_j w_j^H (1/(s - lambda_j) - 1/(s - sigma))``,
+        ``sigma = -SPLIT * radius``; ``E x`` lives on ``T_k`` and ``E^H`` reads ``T_k`` only,
+        so the band's left vectors enter on ``T_k`` alone."""
         Tk = self.parts[k][0]
         WvH_T, Wv_T, _ = self.many[k]
         c = 1.0 / (s - self.band.lam) - 1.0 / (s - self.sigma)

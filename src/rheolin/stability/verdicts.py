@@ -50,6 +50,7 @@ class Verdicts:
     rtol: float | None = None
     key: str = ""  # a map's tasks share their model's speed template in a worker
     offset: int = 0  # the map's index of the first of ``speeds`` (a block on a worker)
+    events: bool = False  # each verdict reported as a Dask event (someone is listening)
 
     def evaluator(self) -> Callable[..., tuple[Any, FloquetResult]]:
         """``evaluate(W, continuation, accuracy, lattice_order)``: the model assembled at
@@ -181,7 +182,9 @@ def _topic(key: str) -> str:
 
 def _reporter(task: Verdicts) -> Callable[[int, FloquetResult], None] | None:
     """``report(i, result)`` as a Dask event of the worker this runs on (the map's index and the
-    pickled result: events travel as msgpack), None outside a worker."""
+    pickled result: events travel as msgpack), None outside a worker or when no one listens."""
+    if not task.events:
+        return None
     try:
         from distributed import get_worker
 
@@ -247,7 +250,7 @@ def in_parallel(
             running = {}
             for b in blocks:
                 part = replace(task, speeds=speeds[b], memory_budget=share, key=key,
-                               offset=int(b[0]))  # fmt: skip
+                               offset=int(b[0]), events=progress is not None)  # fmt: skip
                 running[ex.submit(verdict_block, part)] = b
             while running:
                 while not ex.ready(timeout=EVENT_POLL):
