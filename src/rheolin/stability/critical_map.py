@@ -156,8 +156,9 @@ def _all_roots(K0: Any, B: Any) -> tuple[np.ndarray, np.ndarray]:
 def _lowest_roots(K0: Any, B: Any, k: int) -> tuple[np.ndarray, np.ndarray, float]:
     """The ``k`` roots ``W^2`` of ``(K_0 - W^2 B) x = 0`` nearest a shift ``sigma <= 0`` (0, or
     just below where ``K_0`` is singular) and their vectors, by Arnoldi on
-    ``(K_0 - sigma B)^-1 B``; with ``r`` the largest ``|W^2 - sigma|`` among them: every root
-    closer than ``r`` to ``sigma`` is one of them."""
+    ``(K_0 - sigma B)^-1 B``, and ``top``: with ``r`` the largest ``|W^2 - sigma|`` among
+    them, every root closer than ``r`` to ``sigma`` is one of them, so every positive real
+    root below ``r + sigma = top`` is."""
     n = K0.shape[0]
     scale = _norm1(K0) / max(_norm1(B), 1e-300)
     for sigma in (0.0, -1e-6 * scale, -1e-3 * scale):
@@ -175,7 +176,7 @@ def _lowest_roots(K0: Any, B: Any, k: int) -> tuple[np.ndarray, np.ndarray, floa
     with np.errstate(divide="ignore"):
         mu = sigma + 1.0 / theta
     radius = float(np.max(np.abs(mu - sigma)))
-    return mu, X, radius
+    return mu, X, radius + sigma
 
 
 #: Critical speeds closer than this (relative) are one: the two planes of an isotropic rotor.
@@ -212,8 +213,8 @@ def synchronous_critical_speeds(model: Any, n_modes: int = 4) -> np.ndarray:
             mu, X = _all_roots(K0, B)
             top = float("inf")
         else:  # the lowest k: a root group is judged only when it lies wholly below the top
-            mu, X, radius = _lowest_roots(K0, B, k)
-            top = radius * (1 - 4 * SAME)
+            mu, X, below = _lowest_roots(K0, B, k)
+            top = below * (1 - 4 * SAME)
         ok = np.isfinite(mu) & (mu.real > zero) & (np.abs(mu.imag) <= 1e-6 * np.abs(mu))
         mu, X = mu[ok].real, X[:, ok]
         order = np.argsort(mu)
