@@ -14,7 +14,9 @@ how the solve went (method, gmres strategy, iterations, harmonics). A verdict th
 * the gearbox with every shaft element split (``--gearbox`` DOFs, rheolin.data.fine);
 * ``--runup N``: the gearbox (``--runup-dof`` DOFs) over N speeds from 1000 to 5000 rpm, a
   solve and a verdict at each (a :class:`~rheolin.floquet.Continuation`), and the 200-speed
-  map projected from them.
+  map projected from them; ``--runup-speeds RPM...`` at those speeds instead (``--rotor
+  --gearbox-speeds --gearbox 20000 --runup-speeds 2980 3000 3020``: three speeds 20 rpm
+  apart, as in a 200-speed map, without the single-speed rows).
 
 Usage::
 
@@ -154,6 +156,8 @@ def main() -> None:
     ap.add_argument("--max-order", type=float, default=60.0, help="gearbox solve: cut-off")
     ap.add_argument("--runup", type=int, default=0, help="gearbox run-up speeds (0: none)")
     ap.add_argument("--runup-dof", type=int, default=None, help="run-up DOFs (first --gearbox)")
+    ap.add_argument("--runup-speeds", type=float, nargs="*", default=[],
+                    help="the run-up's speeds [rpm] (instead of --runup's 1000-5000)")  # fmt: skip
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
     head = (
@@ -195,8 +199,8 @@ def main() -> None:
             rows.append(row("gearbox, fine shafts", text, rpm, args.order, args.max_order))
             write()
     tail = ""
-    if args.runup and args.gearbox:
-        speeds = np.linspace(1000.0, 5000.0, args.runup)
+    if (args.runup or args.runup_speeds) and args.gearbox:
+        speeds = np.asarray(args.runup_speeds or np.linspace(1000.0, 5000.0, args.runup))
         dof = args.runup_dof or args.gearbox[0]
         tail = runup(refined_example("gearbox", dof=dof), speeds, args.order, args.max_order)
     print(write(tail))
