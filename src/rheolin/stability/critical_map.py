@@ -108,7 +108,8 @@ def _averaged_parts(model: Any) -> tuple[Any, ...]:
     from ..system.rigid_modes import find_rigid_modes
 
     W = np.array([1.0, 2.0, 3.0])
-    built = [model.assemble(float(w)) for w in W]
+    template = model.speed_template()  # assembled once, its speed terms scaled at each W
+    built = [template.assemble(float(w)) for w in W]
     mats = [b.system for b in built]
 
     def part(s: Any, name: str) -> sp.csc_array:
