@@ -346,7 +346,7 @@ class Scan:
         and ``sum_k sum_m ||G_C(s) E_k x_m||_S`` over the band's displacement vectors."""
         assert self.weight is not None
         S, solve = self.weight
-        c = 1.0 / (s - self.band.lam) - 1.0 / (s - self.sigma)
+        c = self._band_weights(s)
         kappa = qs = 0.0
         if self.low_rank:
             # E_k = J E^_k J^T on T_k within U: ||G_C E_k||_S^2 is the largest eigenvalue of
@@ -360,10 +360,7 @@ class Scan:
             sig = s - 1j * k * self.w
             if k in self.low_rank:
                 at, (Kh, Dh, Mh), C = self.low_rank[k]
-                Eh = np.zeros((Tk.size, Tk.size), dtype=complex)
-                for part, factor in ((Kh, 1.0), (Dh, sig), (Mh, sig * sig)):
-                    if part is not None:
-                        Eh += factor * part
+                Eh = _dense_polynomial((Kh, Dh, Mh), sig, Tk.size)
                 P = PU[np.ix_(at, at)]
                 ev = np.linalg.eigvals(C @ (Eh.conj().T @ P @ Eh))
                 kappa += float(np.sqrt(max(float(np.max(ev.real, initial=0.0)), 0.0)))
@@ -374,16 +371,17 @@ class Scan:
                 apply, adjoint = self._loop(lu, s, k, E)
                 kappa += norm_in(apply, adjoint, S, solve, self.n, self.rng)
                 # G_C E_k X: the band's part from the precomputed projections
-                _, _, proj = self.many[k]
-                WEX = np.zeros((self.Xq.shape[1],) * 2, dtype=complex)
-                for part, factor in zip(proj, (1.0, sig, sig * sig), strict=True):
-                    if part is not None:
-                        WEX += factor * part
+                WEX = _dense_polynomial(self.many[k][2], sig, self.Xq.shape[1])
                 Z = np.asarray(lu.solve(np.asarray(E @ self.Xq, dtype=complex)))
                 Z -= self.Xq @ (c[:, None] * WEX)
                 energy = np.sum(Z.conj() * (S @ Z), axis=0).real
             qs += float(np.sum(np.sqrt(np.maximum(energy, 0.0))))
         return kappa, qs
+
+    def _band_weights(self, s: complex) -> np.ndarray:
+        """The band's part of ``G(s)`` is ``X diag(c) W^H``: ``c_j = 1/(s - lambda_j) -
+        1/(s - sigma)``, its ``1/s`` tail split off (``sigma = -SPLIT * radius``)."""
+        return np.asarray(1.0 / (s - self.band.lam) - 1.0 / (s - self.sigma))
 
     def _loop(self, lu: Any, s: complex, k: int, E: Any) -> tuple[Any, Any]:
         """``x -> G_C(s) E x`` and ``y -> E^H G_C(s)^H y`` for a harmonic ``k`` touching many
@@ -393,7 +391,7 @@ class Scan:
         so the band's left vectors enter on ``T_k`` alone."""
         Tk = self.parts[k][0]
         WvH_T, Wv_T, _ = self.many[k]
-        c = 1.0 / (s - self.band.lam) - 1.0 / (s - self.sigma)
+        c = self._band_weights(s)
         cc = np.conj(c)
         Xq, XqH, n = self.Xq, self.XqH, self.n
         EH = sp.csr_array(E.conj().T)
@@ -603,6 +601,15 @@ class Scan:
             rows_v = (0.0 if Dp is None else Dp) + (0.0 if Mp is None else sj * Mp)
             p += np.sqrt(np.sum(rows_q + np.abs(rows_v) ** 2, axis=1))
         return p
+
+
+def _dense_polynomial(parts: Any, sig: complex, size: int) -> np.ndarray:
+    """``K + sig D + sig^2 M`` of dense ``parts = (K, D, M)`` (absent ones are zero)."""
+    out = np.zeros((size, size), dtype=complex)
+    for part, factor in zip(parts, (1.0, sig, sig * sig), strict=True):
+        if part is not None:
+            out += factor * part
+    return out
 
 
 def _polynomial(K: Any, D: Any, M: Any, sig: complex, n: int) -> sp.csc_array:

@@ -176,19 +176,27 @@ class FloquetResult:
         if self.converged or self.exponents.size == 0:
             return True
         lam = self.exponents
-        weight = self.edge_weight if self.edge_weight.size == lam.size else np.ones(lam.size)
-        loose = weight > EDGE_TOL
-        reach = DECIDE_SAFETY * np.sqrt(weight) * np.maximum(np.abs(lam), self.omega)
-        # an exponent near Im = 0 or w1/2 may be one of a pair about to split into a real pair
-        half = 0.5 * self.omega
-        edge_gap = np.abs(lam.imag / half - np.round(lam.imag / half)) * half
-        near_split = edge_gap < reach
+        loose, reach, clear = self._truncation_reach()
         if not self.stable:
             # unstable for sure when a converged (or clearly growing) exponent says so
             sure = (lam.real > self.tolerances) & (~loose | (lam.real > reach))
             return bool(sure.any())
-        clear = np.where(near_split, lam.real + SPLIT_FACTOR * reach < 0, lam.real + reach < 0)
         return bool(np.all(~loose | clear))
+
+    def _truncation_reach(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Dense and sparse methods: per exponent whether it has not converged in the
+        truncation (``loose``), its error estimate ``reach`` and whether that lies left of the
+        axis (``clear``; four times over near ``Im = 0`` or ``w1 / 2``, where a pair may
+        split into a growing real pair)."""
+        lam = self.exponents
+        weight = self.edge_weight if self.edge_weight.size == lam.size else np.ones(lam.size)
+        loose = weight > EDGE_TOL
+        reach = DECIDE_SAFETY * np.sqrt(weight) * np.maximum(np.abs(lam), self.omega)
+        half = 0.5 * self.omega
+        edge_gap = np.abs(lam.imag / half - np.round(lam.imag / half)) * half
+        near_split = edge_gap < reach
+        clear = np.where(near_split, lam.real + SPLIT_FACTOR * reach < 0, lam.real + reach < 0)
+        return loose, reach, clear
 
     def _decided_lattice(self) -> bool:
         return self._lattice_verdict()[0]
@@ -278,12 +286,8 @@ class FloquetResult:
             "condensed model of the bodies those modes live in"
         )
         if self.method != "lattice":
-            weight = self.edge_weight if self.edge_weight.size == lam.size else np.ones(lam.size)
-            reach = DECIDE_SAFETY * np.sqrt(weight) * np.maximum(np.abs(lam), self.omega)
-            half = 0.5 * self.omega  # as `decided`: near Im = 0 or w1/2, four times nearer
-            near_split = np.abs(lam.imag / half - np.round(lam.imag / half)) * half < reach
-            factor = np.where(near_split, SPLIT_FACTOR, 1.0)
-            rows = np.flatnonzero((weight > EDGE_TOL) & (lam.real + factor * reach >= 0))
+            loose, reach, clear = self._truncation_reach()
+            rows = np.flatnonzero(loose & ~clear)
             what = (
                 "exponents not converged in the truncation, whose error estimate reaches the axis"
             )
@@ -326,10 +330,11 @@ class FloquetResult:
         complex pair or a folded copy named once, at most ``most``); ``""`` for no row."""
         lam = self.exponents
         named: list[int] = []
+        seen: set[tuple[float, float]] = set()
         for i in rows[np.argsort(-lam.real[rows], kind="stable")]:
             key = (round(float(lam[i].real), 9), round(float(abs(lam[i].imag)), 6))
-            if key not in {(round(float(lam[j].real), 9), round(float(abs(lam[j].imag)), 6))
-                           for j in named}:  # fmt: skip
+            if key not in seen:
+                seen.add(key)
                 named.append(int(i))
         if not named:
             return ""

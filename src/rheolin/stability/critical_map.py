@@ -102,13 +102,14 @@ class CriticalSpeedMap:
 
 def _averaged_parts(model: Any) -> tuple[Any, ...]:
     """``(M, K_0, K_2, G, T, assembled)`` of the time-averaged system, by speed
-    (``K = K_0 + W K_1 + W^2 K_2``, ``D = D_0 + W G``) from three assemblies, reduced by
+    (``K = K_0 + W K_1 + W^2 K_2``, ``D = D_0 + W G``) from the model's speed template at
+    three speeds, reduced by
     ``T`` when the model has a free axial or torsional motion (held: no critical speed at 0);
     sparse (CSC)."""
     from ..system.rigid_modes import find_rigid_modes
 
     W = np.array([1.0, 2.0, 3.0])
-    template = model.speed_template()  # assembled once, its speed terms scaled at each W
+    template = model.speed_template()
     built = [template.assemble(float(w)) for w in W]
     mats = [b.system for b in built]
 
@@ -135,16 +136,12 @@ def _averaged_parts(model: Any) -> tuple[Any, ...]:
 
 
 #: Up to this many unknowns the pencil's roots all come by QZ (dense); above, the lowest by
-#: shift-invert Arnoldi on a sparse LU of ``K_0`` (:func:`_lowest_roots`), their number
+#: shift-invert Arnoldi on a sparse LU of ``K_0`` (:class:`_LowestRoots`), their number
 #: doubled while they hold fewer critical speeds than asked, up to ``MAX_ROOTS`` (a model
 #: whose lowest roots mostly do not whirl then has the critical speeds below its
 #: ``MAX_ROOTS``-th root only).
 DENSE_CRITICAL = 600
 MAX_ROOTS = 512
-
-
-def _norm1(A: Any) -> float:
-    return float(abs(A).sum(axis=0).max(initial=0.0)) if A.shape[0] else 0.0
 
 
 def _all_roots(K0: Any, B: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -154,30 +151,36 @@ def _all_roots(K0: Any, B: Any) -> tuple[np.ndarray, np.ndarray]:
     return mu, X
 
 
-def _lowest_roots(K0: Any, B: Any, k: int) -> tuple[np.ndarray, np.ndarray, float]:
-    """The ``k`` roots ``W^2`` of ``(K_0 - W^2 B) x = 0`` nearest a shift ``sigma <= 0`` (0, or
-    just below where ``K_0`` is singular) and their vectors, by Arnoldi on
-    ``(K_0 - sigma B)^-1 B``, and ``top``: with ``r`` the largest ``|W^2 - sigma|`` among
-    them, every root closer than ``r`` to ``sigma`` is one of them, so every positive real
-    root below ``r + sigma = top`` is."""
-    n = K0.shape[0]
-    scale = _norm1(K0) / max(_norm1(B), 1e-300)
-    for sigma in (0.0, -1e-6 * scale, -1e-3 * scale):
-        try:
-            lu = spla.splu(sp.csc_array(K0 - sigma * B).astype(complex))
-        except RuntimeError:  # exactly singular
-            continue
-        break
-    else:
-        raise ModelError("critical speeds: the time-averaged stiffness is singular")
-    op = spla.LinearOperator((n, n), matvec=lambda x: lu.solve(B @ x), dtype=complex)
-    v0 = np.random.default_rng(7).standard_normal(n) + 0j
-    theta, X = spla.eigs(op, k=k, which="LM", ncv=min(n - 1, max(2 * k + 1, 40)), tol=1e-13,
-                         v0=v0)  # fmt: skip
-    with np.errstate(divide="ignore"):
-        mu = sigma + 1.0 / theta
-    radius = float(np.max(np.abs(mu - sigma)))
-    return mu, X, radius + sigma
+class _LowestRoots:
+    """The roots ``W^2`` of ``(K_0 - W^2 B) x = 0`` nearest a shift ``sigma <= 0`` (0, or just
+    below where ``K_0`` is singular; ``scale`` is ``||K_0|| / ||B||``), by Arnoldi on
+    ``(K_0 - sigma B)^-1 B`` through one sparse LU, factorized once for every run."""
+
+    def __init__(self, K0: Any, B: Any, scale: float) -> None:
+        for sigma in (0.0, -1e-6 * scale, -1e-3 * scale):
+            try:
+                lu = spla.splu(sp.csc_array(K0 - sigma * B).astype(complex))
+            except RuntimeError:  # exactly singular
+                continue
+            break
+        else:
+            raise ModelError("critical speeds: the time-averaged stiffness is singular")
+        n = K0.shape[0]
+        self.sigma = sigma
+        self.op = spla.LinearOperator((n, n), matvec=lambda x: lu.solve(B @ x), dtype=complex)
+
+    def __call__(self, k: int) -> tuple[np.ndarray, np.ndarray, float]:
+        """The ``k`` nearest roots, their vectors and ``top``: with ``r`` the largest
+        ``|W^2 - sigma|`` among them, every root closer than ``r`` to ``sigma`` is one of
+        them, so every positive real root below ``r + sigma = top`` is."""
+        n, sigma = self.op.shape[0], self.sigma
+        v0 = np.random.default_rng(7).standard_normal(n) + 0j
+        theta, X = spla.eigs(self.op, k=k, which="LM", ncv=min(n - 1, max(2 * k + 1, 40)),
+                             tol=1e-13, v0=v0)  # fmt: skip
+        with np.errstate(divide="ignore"):
+            mu = sigma + 1.0 / theta
+        radius = float(np.max(np.abs(mu - sigma)))
+        return mu, X, radius + sigma
 
 
 #: Critical speeds closer than this (relative) are one: the two planes of an isotropic rotor.
@@ -205,16 +208,18 @@ def synchronous_critical_speeds(model: Any, n_modes: int = 4) -> np.ndarray:
     """
     M, K0, K2, G, T, built = _averaged_parts(model)
     B = sp.csc_array(M - 1j * G - K2)
-    zero = 1e-10 * _norm1(K0) / max(_norm1(B), 1e-300)
+    scale = float(spla.norm(K0, 1)) / max(float(spla.norm(B, 1)), 1e-300)
+    zero = 1e-10 * scale
     F, Bk = _whirl_maps(model, built)
     n = K0.shape[0]
     k = min(max(4 * n_modes + 8, 24), n - 2)
+    lowest = _LowestRoots(K0, B, scale) if n > DENSE_CRITICAL else None
     while True:
-        if n <= DENSE_CRITICAL:  # every root
+        if lowest is None:  # every root
             mu, X = _all_roots(K0, B)
             top = float("inf")
         else:  # the lowest k: a root group is judged only when it lies wholly below the top
-            mu, X, below = _lowest_roots(K0, B, k)
+            mu, X, below = lowest(k)
             top = below * (1 - 4 * SAME)
         ok = np.isfinite(mu) & (mu.real > zero) & (np.abs(mu.imag) <= 1e-6 * np.abs(mu))
         mu, X = mu[ok].real, X[:, ok]
@@ -243,9 +248,9 @@ def _forward_criticals(
         f, b = F @ V, Bk @ V
         Af, Ab = f.conj().T @ f, b.conj().T @ b
         # whirl ratios of the combinations that whirl at all: the pencil (Af - Ab, Af + Ab)
-        # on the range of Af + Ab (a coincident axial or torsional root adds no whirl)
-        # (whirl energy against the shapes' own size: a root that does not whirl, computed
-        # by Arnoldi, carries rounding's 1e-25 of it, which must not count as a whirl)
+        # on the range of Af + Ab (a coincident axial or torsional root adds no whirl), that
+        # range judged against the shapes' own size (a root that does not whirl, computed by
+        # Arnoldi, carries rounding's 1e-25 of a whirl, which must not count)
         w, U = np.linalg.eigh(0.5 * (Af + Ab + (Af + Ab).conj().T))
         size = float(np.sum(np.abs(V) ** 2))
         live = w > 1e-10 * max(float(w.max(initial=0.0)), size, 1e-300)
