@@ -72,13 +72,28 @@ def splu_checked(A: Any, n: int = -1) -> Any:
     is above :data:`PROBE_BACKWARD`. Raises :class:`SingularBlockError`.
 
     A real matrix is singular when a pivot is below :data:`PIVOT_RTOL` times the largest. A
-    complex one (a harmonic ``n != 0``) when the probe's amplification ``||A||_F ||x|| /
-    ||b||``, a lower estimate of its condition number, exceeds ``1 / PIVOT_RTOL``: SciPy
-    keeps a copy of ``L`` and ``U`` on a factor once they are read, which would double the
-    memory each of the many held complex factors takes.
+    complex one (a harmonic ``n != 0``) when the probe's amplification, a lower estimate of
+    its condition number, exceeds ``1 / PIVOT_RTOL`` (SciPy keeps a copy of ``L`` and ``U``
+    on a factor once they are read, which would double the memory each of the many held
+    complex factors takes). The amplification is that of the symmetrically scaled matrix
+    ``S^-1 A S^-1``, ``S = diag(sqrt|A_ii|)``: ``||S^-1 A S^-1||_F ||S x|| / ||b||`` with
+    ``A x = S b``. An undamped resonance makes it grow without bound in any scaling, where the
+    unscaled one also grows with the units and the mesh (translations against rotations of
+    short beam elements): a shaft meshed to 50,000 DOF has an unscaled amplification of
+    1.6e13 at every harmonic, and 1.6e9 scaled.
+
+    >>> K = sp.csc_array(np.array([[1e8, 0, 0], [0, 2.0, -1.0], [0, -1.0, 2.0]]))
+    >>> M = sp.identity(3, format="csc")
+    >>> lu = splu_checked(sp.csc_array(K - 1.0 * M + 1e-3j * M), n=1)  # off resonance
+    >>> try:
+    ...     splu_checked(sp.csc_array(K - 3.0 * M + 0j * M), n=1)  # at the mode of 3 rad^2/s^2
+    ... except SingularBlockError as exc:
+    ...     print("singular at harmonic", exc.n)
+    singular at harmonic 1
     """
     b = probe_vector(A.shape[0])
     real = not np.iscomplexobj(A)
+    scale = None if real else _jacobi_scale(A)
     lu = None
     for options in (SPLU_OPTIONS, {"permc_spec": "MMD_AT_PLUS_A", **COMPACT}):
         try:
@@ -89,14 +104,28 @@ def splu_checked(A: Any, n: int = -1) -> Any:
             diag = np.abs(lu.U.diagonal())
             if diag.size and diag.min() <= PIVOT_RTOL * diag.max():
                 raise SingularBlockError(n, "pivot below round-off")
-        x = lu.solve(b.astype(A.dtype))
-        if not real:
-            gain = float(np.linalg.norm(A.data) * np.linalg.norm(x) / np.linalg.norm(b))
+        if scale is None:
+            x = lu.solve(b.astype(A.dtype))
+        else:
+            d, norm_s = scale
+            both = lu.solve(np.column_stack([b, d * b]).astype(A.dtype))
+            x = both[:, 0]
+            gain = float(norm_s * np.linalg.norm(d * both[:, 1]) / np.linalg.norm(b))
             if not gain * PIVOT_RTOL < 1.0:
                 raise SingularBlockError(n, f"condition number above {gain:.2g}")
         if backward_error(A, x, b) <= PROBE_BACKWARD:
             return lu
     return lu
+
+
+def _jacobi_scale(A: Any) -> tuple[np.ndarray, float]:
+    """``s = sqrt|A_ii|`` (1 where the diagonal is zero) and ``||S^-1 A S^-1||_F``."""
+    A = sp.csc_array(A)
+    d = np.sqrt(np.abs(A.diagonal()))
+    d[~(d > 0)] = 1.0
+    cols = np.repeat(np.arange(A.shape[1]), np.diff(A.indptr))
+    scaled = A.data / (d[A.indices] * d[cols])
+    return d, float(np.linalg.norm(scaled))
 
 
 class SuperLUFactor:
