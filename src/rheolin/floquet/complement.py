@@ -242,6 +242,7 @@ class Scan:
         self.system, self.band = system, band
         n = system.n
         self.n, self.w = n, system.omega
+        self.stop = float("inf")  # the scan's: a norm whose kappa_C reaches it drops out
         T = touched_dofs(system)
         self.T = T
         self.M0, self.D0, self.K0 = (_part(system, t) for t in (system.M, system.D, system.K))
@@ -449,14 +450,16 @@ class Scan:
             return sv * g - Wf @ (np.conj(c) * (Y.conj().T @ y))
 
         kappa = qs = 0.0
-        for k in self.E:
-            E = self.coupling(k, s - 1j * k * self.w)
+        couplings = [self.coupling(k, s - 1j * k * self.w) for k in self.E]
+        for E in couplings:
             EH = E.conj().T
             kappa += _norm2(
                 lambda x, E=E: hc(E @ x), lambda y, EH=EH: EH @ hc_h(y), 2 * r, self.rng
             )
+        if not kappa < self.stop:  # this norm drops out here: its q_S is not needed
+            return kappa, float("inf")
+        for E in couplings:
             qs += float(np.sum(np.linalg.norm(hc(np.asarray(E @ Y)), axis=0)))
-
         return kappa, qs
 
     def nearest(self, lu: Any, omega: float, steps: int = 5) -> complex:
@@ -507,6 +510,7 @@ class Scan:
         known to fail in it, and its ``kappa`` reports that point's value, a lower bound of
         the largest), and the scan ends when none is left."""
         band = self.band
+        self.stop = stop
         measures = {"energy": self._energy, "balanced": self._balanced}
         # below a tenth of the lowest band frequency the loop is quasi-static: one point at
         # the lowest frequency stands for it (a tenth of the fundamental w1, when lower)
