@@ -101,6 +101,29 @@ def test_a_harmonic_set_beyond_the_budget_is_refused_before_it_is_built(monkeypa
         rl.solve(_system(), 10**7, memory_budget="1 GB")
 
 
+def test_the_preflight_refuses_a_harmonic_set_only_past_the_count_it_states(monkeypatch):
+    """The preflight allows ``budget // per-harmonic bytes`` harmonics and says so; a set of
+    that many is accepted and one more refused. It once counted every harmonic twice and
+    refused the gearbox with shafts at 50,022 DOF at order 2 (659 harmonics, which solve in
+    5.3 GB) as past its 1,007."""
+    import re
+
+    from rheolin.io import parse_model
+    from rheolin.io.preflight import _per_harmonic, preflight
+
+    lm = parse_model(example_text("rotor"))
+    system = lm.model.assemble(lm.spec.model.speed).system
+    size = preflight(lm, None).harmonic_count  # the file's set
+    per = _per_harmonic(system)
+    monkeypatch.setenv("RHEOLIN_SOLVE_MEMORY", str(size * per))
+    assert preflight(lm, None).harmonic_count == size  # exactly as many as fit
+    monkeypatch.setenv("RHEOLIN_SOLVE_MEMORY", str(size * per - 1))
+    with pytest.raises(MemoryBudgetError, match="grows the harmonic set past") as info:
+        preflight(lm, None)
+    stated = int(re.search(r"past ([0-9,]+) harmonics", str(info.value)).group(1).replace(",", ""))
+    assert stated == size - 1
+
+
 def test_a_harmonic_set_without_any_load_harmonic_is_refused():
     """The loads act at harmonics -1 and 1; a set of 0 and +-2 would answer q = 0."""
     with pytest.raises(ModelError, match=r"`harmonics`: the set leaves out every load harmonic"):

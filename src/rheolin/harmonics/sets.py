@@ -123,7 +123,7 @@ class HarmonicSet:
                     for m in (n + g, n - g):
                         if (cap is None or abs(m) <= cap) and m not in current:
                             new.add(m)
-                if max_size is not None and 2 * (len(current) + len(new)) > max_size:
+                if max_size is not None and len(current) + len(new) > max_size:
                     from ..budget import MemoryBudgetError
 
                     raise MemoryBudgetError(
