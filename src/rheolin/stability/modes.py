@@ -199,8 +199,8 @@ def _repeated(lam: np.ndarray) -> bool:
     (True, False)
     """
     z = lam[np.isfinite(lam)]
-    z = z[np.argsort(z.imag, kind="stable")]
-    for step in range(1, min(z.size, 5)):  # neighbours in frequency (conjugates interleave)
+    z = z[np.lexsort((z.real, z.imag))]  # by frequency, then damping (real roots: by value)
+    for step in range(1, min(z.size, 5)):  # neighbours (conjugates and copies interleave)
         scale = np.maximum(np.abs(z[step:]), np.abs(z[:-step]))
         if np.any(np.abs(z[step:] - z[:-step]) <= 1e-8 * np.maximum(scale, 1e-300)):
             return True
