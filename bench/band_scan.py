@@ -44,7 +44,8 @@ def main() -> None:
         scan = C.Scan(system, band)
         out = scan.scan(B._top_frequency(system, band), float("inf"), ("energy",))["energy"]
         print(
-            f"{k} modes (radius {band.radius:.4g} rad/s, Arnoldi {arnoldi:.1f} s): largest "
+            f"{k} modes asked, {band.lam.size} in the band (radius {band.radius:.4g} rad/s, "
+            f"Arnoldi {arnoldi:.1f} s): largest "
             f"kappa_C {out.kappa:.4f} at {out.at:.3g} rad/s, {out.points} points, "
             f"{time.process_time() - t:.1f} s",
             flush=True,

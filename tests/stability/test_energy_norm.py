@@ -190,3 +190,32 @@ def test_band_grows_past_a_failure_after_a_near_miss(monkeypatch) -> None:
     # two failures in a row that would not shrink below 1 at the next size do stop it
     replay[80] = 1.03
     assert band_module.band_modes(system).lam.size == 80
+
+
+def test_band_stops_below_the_cluster_of_stiffness_proportional_damping() -> None:
+    """A chain of 300 unit masses on springs of 1e6 N/m with ``D = beta K``, ``beta = 0.01``
+    s: every mode above ``2 / beta`` is overdamped, and one root of each lies near
+    ``-1/beta = -100`` 1/s (about 270 of them). A band of 120 roots nearest 0 would end inside
+    that cluster, where ARPACK does not converge; the band is the roots below it instead,
+    every root of the dense spectrum within its radius and no other, in seconds."""
+    import time
+
+    n = 300
+    main = 2e6 * np.ones(n)
+    main[-1] = 1e6
+    off = -1e6 * np.ones(n - 1)
+    K = np.diag(main) + np.diag(off, 1) + np.diag(off, -1)
+    system = rl.PeriodicSystem(1.0, M={0: np.eye(n)}, D={0: 0.01 * K}, K={0: K})
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-K, -0.01 * K]])
+    roots = sla.eigvals(A)
+    cluster = np.abs(roots + 100.0) < 5.0
+    assert cluster.sum() > 200  # the accumulation point is there
+    start = time.process_time()
+    band = BandAveraged(system, 120)
+    assert time.process_time() - start < 30.0
+    inside = roots[np.abs(roots) <= band.radius * (1 + 1e-9)]
+    assert 8 <= band.lam.size < 120
+    assert band.lam.size == inside.size  # complete within its radius
+    assert np.all(np.abs(band.radius - 100.0) > 0)
+    assert np.max(np.abs(np.sort_complex(band.lam) - np.sort_complex(inside))) < 1e-6 * 100
+    assert not np.any(np.abs(band.lam + 100.0) < 5.0)  # none of the cluster's

@@ -24,6 +24,7 @@ True
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -66,14 +67,26 @@ BAND_MAX_MODES = 320
 
 #: From this many modes on, a certified band is kept while its ``kappa_C`` is below
 #: :data:`KEEP_LIMIT` (below that, it doubles above
-#: :data:`~rheolin.floquet.complement.KAPPA_LIMIT`): ARPACK's cost grows with the square of
-#: the band (19,998-DOF gearbox: 320 modes ran for more than 15 CPU minutes, where the bands
-#: of 40 to 160 took 15 s together).
+#: :data:`~rheolin.floquet.complement.KAPPA_LIMIT`): 320 modes of the 19,998-DOF gearbox ran
+#: for more than 15 CPU minutes, where the bands of 40 to 160 took 15 s together (their edge
+#: falls in the cluster of roots near ``-1/beta`` of its stiffness-proportional damping, where
+#: ARPACK stalls: docs/stability.md, 8.2).
 BAND_KEEP = 160
 KEEP_LIMIT = 0.9
 
 #: ARPACK's relative accuracy of the band's Ritz values.
 ARPACK_TOL = 1e-12
+
+#: ARPACK restarts after which a band's run is taken as stalled: its edge then lies inside a
+#: cluster of nearly equal roots (the accumulation near ``-1/beta`` of stiffness-proportional
+#: damping, ``D = beta K``, one root of every overdamped high mode of a fine mesh), which
+#: ARPACK does not converge. The band is then the roots below the cluster: computed again
+#: with :data:`STALL_MARGIN` fewer than the stalled run had converged, an edge in the gap
+#: below the cluster (docs/stability.md, 8.2). Bands that do not reach a cluster converge in
+#: one to three restarts.
+BAND_RESTARTS = 10
+STALL_MARGIN = 4
+STALL_RETRIES = 3
 
 
 def _parts(system: PeriodicSystem) -> tuple[sp.csc_array, sp.csc_array, sp.csc_array]:
@@ -175,15 +188,13 @@ def _arpack(
         b = -lu.solve(c1 + sigma * c2, trans="T")
         return np.concatenate([c2 + DMT @ b, b])
 
-    ncv = int(min(2 * n - 1, max(2 * k + 1, 40)))
     rng = np.random.default_rng(31)
     v0 = rng.standard_normal(2 * n)
     L = spla.LinearOperator((2 * n, 2 * n), matvec=op, dtype=float)
-    theta, X = spla.eigs(L, k=k, which="LM", ncv=ncv, tol=ARPACK_TOL, v0=v0)
-    kk = int(min(k + 4, 2 * n - 2))
+    theta, X = _below_clusters(L, k, v0)
+    kk = int(min(theta.size + 4, 2 * n - 2))
     LT = spla.LinearOperator((2 * n, 2 * n), matvec=op_t, dtype=float)
-    theta_t, Y = spla.eigs(LT, k=kk, which="LM", ncv=int(min(2 * n - 1, max(2 * kk + 1, 40))),
-                           tol=ARPACK_TOL, v0=v0)  # fmt: skip
+    theta_t, Y = _below_clusters(LT, kk, v0)  # the roots it misses: by inverse iteration
     lam = sigma + 1.0 / theta
     lam_t = np.conj(sigma + 1.0 / theta_t)  # left vectors belong to conj of the adjoint's
     W = np.zeros_like(X)
@@ -194,6 +205,31 @@ def _arpack(
         else:  # not among the adjoint's: inverse iteration at the eigenvalue
             W[:, j] = _left_vector(K, D, M, z, X[:, j])
     return lam, X, W
+
+
+def _below_clusters(L: Any, k: int, v0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The ``k`` eigenpairs of largest modulus of ``L`` by ARPACK; where its run stalls
+    (:data:`BAND_RESTARTS`), those below the cluster its edge fell in: the run again with
+    :data:`STALL_MARGIN` fewer than it had converged, up to :data:`STALL_RETRIES` times
+    (ARPACK's error when the last stalls too, or when fewer than two are left)."""
+    size = L.shape[0]
+
+    def run(count: int) -> tuple[np.ndarray, np.ndarray]:
+        ncv = int(min(size - 1, max(2 * count + 1, 40)))
+        return spla.eigs(
+            L, k=count, which="LM", ncv=ncv, tol=ARPACK_TOL, v0=v0, maxiter=BAND_RESTARTS
+        )
+
+    count = k
+    for _ in range(STALL_RETRIES):
+        try:
+            return run(count)
+        except spla.ArpackNoConvergence as exc:
+            fewer = int(exc.eigenvalues.size) - STALL_MARGIN
+            if fewer < 2:
+                raise
+            count = fewer
+    return run(count)
 
 
 def _left_vector(
@@ -230,10 +266,13 @@ def band_modes(
     k = BAND_MODES if modes is None else int(modes)
     failed: list[float] = []  # kappa_C of the last bands in a row that failed (>= 1)
     cpu = {"arnoldi": 0.0, "scan": 0.0}  # CPU seconds of every band tried
+    previous: BandAveraged | None = None
     while True:
         t = time.process_time()
         band = BandAveraged(system, k)
         cpu["arnoldi"] += time.process_time() - t
+        if previous is not None and band.lam.size <= previous.lam.size:
+            return previous  # stopped below a cluster no larger than the last band
         band.cpu = cpu
         bigger = 2 * k
         last = (
@@ -255,7 +294,7 @@ def band_modes(
                 return band
         else:  # below 1 but above its limit: hopeless() compares consecutive sizes only
             failed.clear()
-        k = bigger
+        previous, k = band, bigger
 
 
 def hopeless(failed: list[float]) -> bool:
