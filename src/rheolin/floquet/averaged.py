@@ -26,6 +26,18 @@ MAX_AVERAGED_DENSE = 4000
 STANDARD_COND = 1e6
 
 
+def standard_problem(Ms: np.ndarray) -> bool:
+    """Whether a first-order pencil with ``B = diag(I, Ms)`` (balanced) goes to the standard
+    problem ``B^-1 A``: ``cond(B)`` at most :data:`STANDARD_COND`.
+
+    >>> standard_problem(np.diag([1.0, 2.0])), standard_problem(np.diag([1.0, 1e-9]))
+    (True, False)
+    """
+    mu = np.linalg.svd(Ms, compute_uv=False) if Ms.size else np.ones(1)
+    hi, lo = max(float(mu.max()), 1.0), min(float(mu.min()), 1.0)
+    return lo > 0 and hi / lo <= STANDARD_COND
+
+
 class Averaged:
     """Eigen-decomposition of the time-averaged balanced pencil (first-order, ``2 n``)."""
 
@@ -39,13 +51,11 @@ class Averaged:
             )
         self.sq, self.sv = sq, sv = state_scaling(system)
         Ad, Bd, Ms = averaged_pencil(system, sq, sv)
-        # cond(B) from the balanced mass block (B = diag(I, M))
-        mu = np.linalg.svd(Ms, compute_uv=False) if n else np.ones(1)
-        hi, lo = max(float(mu.max()), 1.0), min(float(mu.min()), 1.0)
+        standard = standard_problem(Ms)
         known = system.kept("averaged_decomposition")
-        if known is not None and lo > 0 and hi / lo <= STANDARD_COND and Ad.dtype == float:
+        if known is not None and standard and Ad.dtype == float:
             lam, X, W = _from_modal(known, sq, sv)
-        elif lo > 0 and hi / lo <= STANDARD_COND:
+        elif standard:
             # B^-1 A by blocks (B = diag(I, M)); left vectors of the pencil from those of
             # B^-1 A: w^H B^-1 A = lam w^H B^-1
             C = Ad.copy()

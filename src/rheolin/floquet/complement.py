@@ -23,7 +23,9 @@ Two certificates make the band search (:mod:`rheolin.floquet.band`) complete:
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -242,7 +244,6 @@ class Scan:
         self.system, self.band = system, band
         n = system.n
         self.n, self.w = n, system.omega
-        self.stop = float("inf")  # the scan's: a norm whose kappa_C reaches it drops out
         T = touched_dofs(system)
         self.T = T
         self.M0, self.D0, self.K0 = (_part(system, t) for t in (system.M, system.D, system.K))
@@ -409,9 +410,10 @@ class Scan:
 
         return apply, adjoint
 
-    def _balanced(self, lu: Any, s: complex) -> tuple[float, float]:
+    def _balanced(self, lu: Any, s: complex, stop: float = float("inf")) -> tuple[float, float]:
         """``(kappa_C, q_S)`` at ``s`` in the Euclidean norm of the balanced first-order state
-        at the touched DOFs, with the band's first-order part taken out."""
+        at the touched DOFs, with the band's first-order part taken out (``q_S`` infinite,
+        not computed, where ``kappa_C`` reaches ``stop``: the norm drops out there)."""
         band = self.band
         c = 1.0 / (s - band.lam)
         T, n, r = self.T, self.n, self.T.size
@@ -428,9 +430,11 @@ class Scan:
                 kappa += float(np.linalg.norm(P, 2))
                 qs += float(np.sum(np.linalg.norm(P @ self.Y, axis=0)))
             return kappa, qs
-        return self._operators(lu, s, c)
+        return self._operators(lu, s, c, stop)
 
-    def _operators(self, lu: Any, s: complex, c: np.ndarray) -> tuple[float, float]:
+    def _operators(
+        self, lu: Any, s: complex, c: np.ndarray, stop: float = float("inf")
+    ) -> tuple[float, float]:
         """:meth:`_balanced` for many touched DOFs: the norms by power iteration."""
         T, n, r = self.T, self.n, self.T.size
         sq, sv, Y, Wf = self.sq, self.sv, self.Y, self.Wf
@@ -456,7 +460,7 @@ class Scan:
             kappa += _norm2(
                 lambda x, E=E: hc(E @ x), lambda y, EH=EH: EH @ hc_h(y), 2 * r, self.rng
             )
-        if not kappa < self.stop:  # this norm drops out here: its q_S is not needed
+        if not kappa < stop:  # this norm drops out at this point: its q_S is not needed
             return kappa, float("inf")
         for E in couplings:
             qs += float(np.sum(np.linalg.norm(hc(np.asarray(E @ Y)), axis=0)))
@@ -510,8 +514,10 @@ class Scan:
         known to fail in it, and its ``kappa`` reports that point's value, a lower bound of
         the largest), and the scan ends when none is left."""
         band = self.band
-        self.stop = stop
-        measures = {"energy": self._energy, "balanced": self._balanced}
+        measures: dict[str, Callable[[Any, complex], tuple[float, float]]] = {
+            "energy": self._energy,
+            "balanced": partial(self._balanced, stop=stop),
+        }
         # below a tenth of the lowest band frequency the loop is quasi-static: one point at
         # the lowest frequency stands for it (a tenth of the fundamental w1, when lower)
         lowest = float(np.min(np.abs(band.lam), initial=np.inf))

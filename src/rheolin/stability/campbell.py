@@ -260,12 +260,12 @@ def campbell(
         raise ValueError("`speeds_rad_s` must be >= 0 and strictly increasing [rad/s]")
     rows = []
     template = model.speed_template()  # assembled once, rescaled at every speed
+    axes = {b: model.bodies[b].axis for b in model.bodies}
     for W in speeds:
         # standstill: the periodic system needs a base frequency > 0; at 1e-9 rad/s the speed
         # terms (gyroscopic, centrifugal) are ~1e-9 of their value at 1 rad/s: the W = 0 modes
         a = template.assemble(float(W) if W > 0 else STANDSTILL)
         modes = averaged_modes(a.system, n_modes, method=method)
-        axes = {b: model.bodies[b].axis for b in model.bodies}
         ratio = whirl_ratio(modes.shapes, a.dof_labels, axes, a.plan.spin)
         energy = mode_energy(modes.shapes, a.dof_labels, axes, a.system.M[0])
         kinds = planetary_kinds(mode_kind(energy, ratio), modes.shapes, model, a)

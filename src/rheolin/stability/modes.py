@@ -15,6 +15,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..floquet.averaged import standard_problem
 from ..harmonics.hill import hill_pencil, state_scaling
 from ..mechanics.rotation import transverse_basis
 from ..system.periodic import PeriodicSystem
@@ -152,17 +153,11 @@ def averaged_modes(
     return AveragedModes(lam, q, int(rigid.sum()))
 
 
-#: ``averaged_modes`` solves the standard problem ``B^-1 A`` (``B = diag(I, M)``: one solve
-#: with the mass block, then an eigen-solve several times faster than QZ) while the balanced
-#: mass block's condition number stays below this; above it (massless or nearly massless
-#: DOFs) QZ on the pencil keeps the infinite eigenvalues apart.
-STANDARD_COND = 1e6
-
-
 def _dense_modes(A: np.ndarray, B: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Eigenvalues and right vectors of ``lambda B y = A y`` (first order, ``2 n``): the
-    standard problem ``B^-1 A`` when the mass block ``B[n:, n:]`` is well conditioned
-    (:data:`STANDARD_COND`), else QZ.
+    """Eigenvalues and right vectors of ``lambda B y = A y`` (first order, ``2 n``,
+    ``B = diag(I, M)`` balanced): the standard problem ``B^-1 A`` (one solve with the mass
+    block, then an eigen-solve several times faster than QZ) when ``B`` is well conditioned
+    (:func:`~rheolin.floquet.averaged.standard_problem`), else QZ.
 
     >>> A = np.array([[0.0, 1.0], [-4.0, -0.4]]); B = np.diag([1.0, 2.0])
     >>> lam, _ = _dense_modes(A, B, 1)
@@ -170,15 +165,8 @@ def _dense_modes(A: np.ndarray, B: np.ndarray, n: int) -> tuple[np.ndarray, np.n
     True
     """
     Ms = B[n:, n:]
-    mu = np.linalg.svd(Ms, compute_uv=False) if n else np.ones(1)
-    good = n and float(mu.min()) > 0 and float(mu.max()) <= STANDARD_COND * float(mu.min())
     with np.errstate(under="ignore", invalid="ignore", divide="ignore"):
-        if (
-            good
-            and np.allclose(B[:n, :n], np.eye(n))
-            and not np.any(B[:n, n:])
-            and not np.any(B[n:, :n])
-        ):
+        if n and standard_problem(Ms):
             C = np.array(A, dtype=np.result_type(A, Ms))
             C[n:] = np.linalg.solve(Ms, A[n:])
             if np.iscomplexobj(C) and not np.any(C.imag):
