@@ -126,7 +126,7 @@ def certified_band(system: PeriodicSystem, band: int | None, budget: Any, order:
     """The certified band of a large model (:func:`~rheolin.floquet.band.band_modes`),
     refused with :class:`~rheolin.budget.MemoryBudgetError` before anything is built when the
     first band and the lattice search at ``order`` exceed the memory budget."""
-    from threadpoolctl import threadpool_limits
+    from ..linalg.threads import single_thread_blas
 
     limit = resolve_budget(budget)
     estimate = band_estimate(system, order, band)
@@ -137,7 +137,7 @@ def certified_band(system: PeriodicSystem, band: int | None, budget: Any, order:
             f"{format_bytes(limit)}; condense bodies (Craig-Bampton) or mesh the shafts more "
             "coarsely, or raise the budget (RHEOLIN_MEMORY_BUDGET or `memory_budget`)"
         )
-    with threadpool_limits(limits=1, user_api="blas"):  # many small products: one thread
+    with single_thread_blas():  # many small products: one thread
         return band_modes(system, band, limit)
 
 

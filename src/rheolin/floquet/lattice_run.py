@@ -13,6 +13,7 @@ import numpy as np
 from ..budget import MemoryBudgetError, format_bytes
 from ..budget import memory_budget as resolve_budget
 from ..harmonics.lattice import Lattice
+from ..linalg.threads import single_thread_blas
 from ..system.periodic import PeriodicSystem
 from . import large
 from .accuracy import leading_uncertainty, refine_leading, refine_open
@@ -75,6 +76,21 @@ def lattice_auto(
     does not, the undecided coarse verdict says so). The lattices see resonances
     (:func:`~rheolin.floquet.resonance.floquet_lattice`). A large model (or ``band``) starts
     from the band of time-averaged modes, built once for every order."""
+    with single_thread_blas():  # the averaged modes and lattice costs too
+        return _lattice_auto(system, order, budget, refine, near, continuation, band, rtol)
+
+
+def _lattice_auto(
+    system: PeriodicSystem,
+    order: int | None,
+    budget: Any,
+    refine: bool,
+    near: Any,
+    continuation: Continuation | None,
+    band: int | None,
+    rtol: float | None,
+) -> FloquetResult:
+    """:func:`lattice_auto`, BLAS on one thread."""
     limit = resolve_budget(budget)
     p = DEFAULT_LATTICE_ORDER if order is None else int(order)
     top = max(MAX_AUTO_ORDER, DEFAULT_LATTICE_ORDER)
@@ -290,21 +306,3 @@ def search_result(
     if order.size:
         res.max_real_uncertainty = leading_uncertainty(out, int(order[0]))
     return res
-
-
-class single_thread_blas:
-    """Limit BLAS to one thread: the lattice kernels are many small products, where
-    threads cost more than they bring (bench/stability.py, design notes)."""
-
-    def __enter__(self) -> None:
-        try:
-            from threadpoolctl import threadpool_limits
-        except ImportError:  # pragma: no cover - threadpoolctl is a dependency
-            self._ctx = None
-            return
-        self._ctx = threadpool_limits(limits=1, user_api="blas")
-        self._ctx.__enter__()
-
-    def __exit__(self, *exc: Any) -> None:
-        if self._ctx is not None:
-            self._ctx.__exit__(*exc)

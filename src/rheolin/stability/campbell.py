@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from ..linalg.threads import single_thread_blas
 from .modes import (
+    DENSE_MODES_LIMIT,
     WHIRL_THRESHOLD,
     averaged_modes,
     mac,
@@ -265,9 +268,12 @@ def campbell(
         # standstill: the periodic system needs a base frequency > 0; at 1e-9 rad/s the speed
         # terms (gyroscopic, centrifugal) are ~1e-9 of their value at 1 rad/s: the W = 0 modes
         a = template.assemble(float(W) if W > 0 else STANDSTILL)
-        modes = averaged_modes(a.system, n_modes, method=method)
-        ratio = whirl_ratio(modes.shapes, a.dof_labels, axes, a.plan.spin)
-        energy = mode_energy(modes.shapes, a.dof_labels, axes, a.system.M[0])
+        small = method == "dense" or (method == "auto" and 2 * a.system.n <= DENSE_MODES_LIMIT)
+        # a few hundred rows: BLAS threads cost more than they bring (linalg.threads)
+        with single_thread_blas() if small else contextlib.nullcontext():
+            modes = averaged_modes(a.system, n_modes, method=method)
+            ratio = whirl_ratio(modes.shapes, a.dof_labels, axes, a.plan.spin)
+            energy = mode_energy(modes.shapes, a.dof_labels, axes, a.system.M[0])
         kinds = planetary_kinds(mode_kind(energy, ratio), modes.shapes, model, a)
         rows.append((modes, ratio, kinds))
         if progress is not None:
