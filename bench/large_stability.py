@@ -85,6 +85,7 @@ def row(name: str, text: str, rpm: float, order: int | None, max_order: float | 
         print(line, flush=True)
         return line
     band = res.info.get("band") or {}
+    beta = f", beta* {band['beta']:.2g}" if "beta" in band else ""
     stages = band.get("cpu") or {}
     arnoldi, scan = stages.get("arnoldi", float("nan")), stages.get("scan", float("nan"))
     search = f_cpu - (arnoldi + scan if stages else 0.0)
@@ -93,7 +94,8 @@ def row(name: str, text: str, rpm: float, order: int | None, max_order: float | 
         f"{f_wall:.2f} / {f_cpu:.2f} | {arnoldi:.2f} | {scan:.2f} | {search:.2f} | "
         f"{f_cpu / max(s_cpu, 1e-9):.2f} | {verdict} | {res.max_real:.6g} | "
         f"{band.get('modes', '-')} | {band.get('kappa', float('nan')):.3g} "
-        f"{'(' + band['norm'] + ')' if 'norm' in band else ''} | "
+        f"{'(' + band['norm'] + ')' if 'norm' in band else ''}"
+        f"{beta} | "
         f"{s_peak:.0f} | {peak:.0f} | {how} |"
     )
     print(line, flush=True)
@@ -163,7 +165,7 @@ def main() -> None:
     head = (
         "| model | DOF | rpm | assembly CPU s | solve s (wall / CPU) | verdict s (wall / CPU) | "
         "band Arnoldi CPU s | scan CPU s | lattice search CPU s | CPU ratio | verdict | "
-        "largest real part 1/s | band modes | kappa_C | solve peak MB | verdict peak MB | "
+        "largest real part 1/s | band modes | kappa_C, beta* | solve peak MB | verdict peak MB | "
         "solve |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
     )

@@ -12,6 +12,7 @@ References, each independent of the code under test:
 from __future__ import annotations
 
 import importlib
+import itertools
 
 import numpy as np
 import pytest
@@ -98,32 +99,56 @@ def _lu(scan: Scan, s: complex):
 def test_loop_gain_in_the_energy_norm_matches_the_dense_norm(
     gearbox, monkeypatch, low_rank
 ) -> None:
-    """``kappa_C(s) = sum_k ||G_C(s) E_k(s - i k w1)||_S`` from the scan (exact low-rank
-    blocks for the harmonics that touch few DOFs, power iteration for the others: both ways
-    for every harmonic) against the dense operator norms ``||L^H G_C E_k L^-H||_2``,
-    ``S = L L^H``, and ``q_S = sum_k sum_m ||G_C(s) E_k x_m||_S`` over the band's
-    displacement vectors against the same dense products. The values span 0.26 to 0.67
-    here."""
+    """``kappa_C(s) = sum_k ||G_C(s) E_k(s - i k w1)||`` into ``N(omega) = mu / (mu +
+    omega^2) (S + omega^2 M_s)`` from an input norm no larger than ``N(omega_k)``,
+    ``omega_k = |omega - k w1|``: ``N(omega_hi)`` (``omega_hi = max_k omega_k``) or
+    ``alpha(omega_k) S`` (``alpha(w) = mu / (mu + w^2)``), the smaller bound of the two for
+    the harmonics that touch few DOFs (exact low-rank blocks), the one of smaller worst case
+    for the others (Lanczos), both ways for every harmonic; against the dense operator norms
+    ``||L_out^H G_C E_k L_in^-H||_2`` (``N = L L^H``), and ``q_S = sum_k sum_m ||G_C(s) E_k
+    x_m||_N(omega)`` over the band's displacement vectors against the same dense products."""
     monkeypatch.setattr(importlib.import_module("rheolin.floquet.complement"), "LOW_RANK", low_rank)
     band = BandAveraged(gearbox, 80)
     scan = Scan(gearbox, band)
-    assert scan.weight is not None
+    assert scan.weight is not None and scan.family.varying
     S = _dense(scan.weight[0])
-    L = np.linalg.cholesky(S)
+    Ms = _dense(gearbox.M[0])
+    Ms = (Ms + Ms.T) / 2
+    mu = scan.family.mu
+
+    def alpha(omega: float) -> float:
+        return mu / (mu + omega**2)
+
+    def norm(omega: float) -> np.ndarray:  # N(omega), written out
+        return alpha(omega) * (S + omega**2 * Ms)
+
     reference = _left_out(gearbox, band, scan.sigma)
     w = gearbox.omega
     parts = {k: [_dense(t.get(k, np.zeros((gearbox.n,) * 2))) for t in (gearbox.K, gearbox.D,
                                                                         gearbox.M)]
              for k in gearbox.coefficient_harmonics}  # fmt: skip
+    L_S = np.linalg.cholesky(S)
     for omega in (0.5, 2.0e3, 1.2e5, 3.0e7):
         s = 1j * omega
         G = reference(s)
+        hi = max(abs(omega - k * w) for k in parts)
+        L = np.linalg.cholesky(norm(omega))
+        L_hi = np.linalg.cholesky(norm(hi))
         dense = coupled = 0.0
         for k, (K, D, M) in parts.items():
             sk = s - 1j * k * w
             A = G @ (K + sk * D + sk * sk * M)
-            dense += np.linalg.norm(L.conj().T @ sla.solve_triangular(L, A.T, lower=True).T, 2)
-            # q_S: the band's displacement vectors through the loop, each in the energy norm
+            a = alpha(abs(omega - k * w))
+
+            def gain(Lin: np.ndarray, A: np.ndarray = A, L: np.ndarray = L) -> float:
+                return np.linalg.norm(L.conj().T @ sla.solve_triangular(Lin, A.T, lower=True).T, 2)
+
+            scaled, at_hi = gain(np.sqrt(a) * L_S), gain(L_hi)
+            if low_rank:
+                dense += min(scaled, at_hi)
+            else:
+                dense += at_hi if a / alpha(hi) < 1 / a else scaled
+            # q_S: the band's displacement vectors through the loop, each in the output norm
             coupled += np.sum(np.linalg.norm(L.conj().T @ (A @ scan.Xq), axis=0))
         kappa, qs = scan._energy(scan.factor(omega), s)
         assert kappa == pytest.approx(dense, rel=1e-5 if low_rank == 0 else 1e-7), omega
@@ -219,3 +244,49 @@ def test_band_stops_below_the_cluster_of_stiffness_proportional_damping() -> Non
     assert np.all(np.abs(band.radius - 100.0) > 0)
     assert np.max(np.abs(np.sort_complex(band.lam) - np.sort_complex(inside))) < 1e-6 * 100
     assert not np.any(np.abs(band.lam + 100.0) < 5.0)  # none of the cluster's
+
+
+def test_the_norms_of_the_scan_come_from_an_analytic_factor() -> None:
+    """What the small-gain argument needs of the frequency's norms
+    (:class:`~rheolin.floquet.energy_norm.EnergyFamily`), on a random stiffness and mass:
+    ``N(omega) = F(i omega)^H F(i omega)`` with ``F(s) = (I + s L^1/2) V^-1 / (1 + s /
+    sqrt(mu))`` (``V^T S V = I``, ``V^T M V = L``: analytic and invertible for ``Re s >= 0``);
+    ``||F(s) x||^2 >= mu x^H M x`` there (the dual norms' bound); and ``N`` decreasing with
+    the frequency (the largest shifted frequency gives the smallest input norm)."""
+    from rheolin.floquet.energy_norm import EnergyFamily
+
+    rng = np.random.default_rng(7)
+    n = 12
+    A = rng.standard_normal((n, n))
+    K = A @ A.T * 1e4  # stiffness with a spread of frequencies
+    B = rng.standard_normal((n, n))
+    M = B @ B.T + n * np.eye(n)
+    family = EnergyFamily(K, M, radius=30.0)
+    mu = family.mu
+    S = K + mu * M
+    lam, V = sla.eigh(S, M)  # S V = M V lam, V^T M V = I
+    # V^T S V = I and V^T M V = L from the same vectors, scaled
+    V = V / np.sqrt(lam)[None, :]
+    L = 1.0 / lam
+    assert np.allclose(V.T @ S @ V, np.eye(n), atol=1e-9)
+    assert np.allclose(V.T @ M @ V, np.diag(L), atol=1e-12)
+    Vi = np.linalg.inv(V)
+
+    def F(s: complex) -> np.ndarray:
+        return (np.eye(n) + s * np.diag(np.sqrt(L))) @ Vi / (1 + s / np.sqrt(mu))
+
+    for omega in (0.0, 3.0, 30.0, 300.0, 3e4):
+        N = family.output(omega)
+        N = N.toarray() if hasattr(N, "toarray") else N
+        Fi = F(1j * omega)
+        assert np.allclose(Fi.conj().T @ Fi, N, rtol=1e-9, atol=1e-9 * np.abs(N).max())
+    for _ in range(50):
+        s = abs(rng.standard_normal()) * 10 ** rng.uniform(
+            -2, 4
+        ) + 1j * rng.standard_normal() * 10 ** rng.uniform(-2, 4)
+        x = rng.standard_normal(n) + 1j * rng.standard_normal(n)
+        assert np.linalg.norm(F(s) @ x) ** 2 >= mu * np.real(x.conj() @ M @ x) * (1 - 1e-12)
+    grid = [0.0, 1.0, 10.0, 100.0, 1e3, 1e5]
+    for lo, hi in itertools.pairwise(grid):
+        gap = _dense(family.output(lo)) - _dense(family.output(hi))
+        assert np.linalg.eigvalsh((gap + gap.T) / 2).min() >= -1e-9 * np.abs(gap).max()

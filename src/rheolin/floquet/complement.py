@@ -32,7 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..system.periodic import PeriodicSystem
-from .energy_norm import energy_weight, norm_in, positive_definite
+from .energy_norm import SAME_INPUT, EnergyFamily, norm_in, positive_definite
 from .shift_invert import PatternLU
 
 __all__ = [
@@ -278,12 +278,15 @@ class Scan:
         self.XqH, self.WvH = (np.ascontiguousarray(x.conj().T) for x in (self.Xq, self.Wv))
         radius = float(np.max(np.abs(band.lam), initial=self.w))
         self.sigma = -SPLIT * radius
-        self.weight = energy_weight(self.K0, self.M0, radius)
+        # the energy norms of the frequency (energy_norm.EnergyFamily): S at low frequency
+        self.family = family = EnergyFamily(self.K0, self.M0, radius)
+        self.weight = (family.S, family.solve) if family.definite else None
         self.parts: dict[int, tuple[Any, ...]] = {}
         # harmonics touching few DOFs T_k (gear meshes): their blocks E_k[T_k, T_k] and
         # C_k = J^T S^-1 J, with one set of responses G_C(s) J_U per point on the union U
         self.low_rank: dict[int, tuple[np.ndarray, list[Any], np.ndarray]] = {}
         self.JU = np.zeros((n, 0))  # unit forces on the union U of those T_k
+        self.U = np.zeros(0, dtype=np.int64)
         self.WvH_U = np.zeros((band.lam.size, 0), dtype=complex)  # W^H J_U
         if self.weight is None:
             return
@@ -305,6 +308,7 @@ class Scan:
         if not few:
             return
         U = np.unique(np.concatenate(few))
+        self.U = U
         self.JU = np.zeros((n, U.size))
         self.JU[U, np.arange(U.size)] = 1.0
         self.WvH_U = np.ascontiguousarray(self.WvH[:, U])
@@ -344,34 +348,67 @@ class Scan:
             return None
 
     def _energy(self, lu: Any, s: complex) -> tuple[float, float]:
-        """``(kappa_C, q_S)`` at ``s`` in the energy norm: ``sum_k ||G_C(s) E_k(s - i k w1)||_S``
-        and ``sum_k sum_m ||G_C(s) E_k x_m||_S`` over the band's displacement vectors."""
+        """``(kappa_C, q_S)`` at ``s = i omega`` in the energy norms of the frequency
+        (:class:`~rheolin.floquet.energy_norm.EnergyFamily`): ``sum_k ||G_C(s) E_k(s - i k
+        w1)||`` from ``N(omega - k w1)`` to ``N(omega)`` and ``sum_k sum_m ||G_C(s) E_k
+        x_m||_N(omega)`` over the band's displacement vectors.
+
+        Each input norm ``N(omega_k)`` is replaced by a smaller one, which can only raise the
+        bound: ``N(omega_hi)`` (``omega_hi = max_k |omega - k w1|``, one factor per point)
+        or ``alpha(omega_k) S`` (the factor of ``S``), whichever bounds the harmonic's loop
+        better (both for the harmonics touching few DOFs; for the others the one whose
+        worst case is smaller)."""
+        with np.errstate(under="ignore"):  # the scaled norms' tiny entries are zeros
+            return self._energy_at(lu, s)
+
+    def _energy_at(self, lu: Any, s: complex) -> tuple[float, float]:
+        """:meth:`_energy`, underflow ignored."""
         assert self.weight is not None
-        S, solve = self.weight
+        family = self.family
+        omega = abs(float(s.imag))
+        shifted = {k: abs(omega - k * self.w) for k, (Tk, *_) in self.parts.items() if Tk.size}
+        hi = max(shifted.values(), default=omega)
+        S = family.output(omega)
+        S_hi, solve_hi = family.input(hi)
+        fresh = family.varying and hi * hi > SAME_INPUT * family.mu  # N(hi) factorized
         c = self._band_weights(s)
         kappa = qs = 0.0
+        CU_hi = None
         if self.low_rank:
-            # E_k = J E^_k J^T on T_k within U: ||G_C E_k||_S^2 is the largest eigenvalue of
-            # C_k E^H P E^ with P = (G_C J_U)^H S (G_C J_U) on T_k (C_k = J^T S^-1 J: the
-            # smallest energy of a state with given values on T_k); q_S from the same P
+            # E_k = J E^_k J^T on T_k within U: ||G_C E_k||^2 is the largest eigenvalue of
+            # C_k E^H P E^ with P = (G_C J_U)^H N (G_C J_U) on T_k (C_k = J^T N_in^-1 J: the
+            # smallest input energy of a state with given values on T_k); q_S from the same P
             GU = np.asarray(lu.solve(self.JU.astype(complex))) - self.Xq @ (c[:, None] * self.WvH_U)
             PU = GU.conj().T @ (S @ GU)
+            if fresh:
+                CU_hi = np.asarray(solve_hi(self.JU))[self.U]
         for k, (Tk, K, D, M) in self.parts.items():
             if Tk.size == 0:
                 continue
             sig = s - 1j * k * self.w
+            alpha = family.alpha(shifted[k])
             if k in self.low_rank:
                 at, (Kh, Dh, Mh), C = self.low_rank[k]
                 Eh = _dense_polynomial((Kh, Dh, Mh), sig, Tk.size)
                 P = PU[np.ix_(at, at)]
-                ev = np.linalg.eigvals(C @ (Eh.conj().T @ P @ Eh))
-                kappa += float(np.sqrt(max(float(np.max(ev.real, initial=0.0)), 0.0)))
+                X = Eh.conj().T @ P @ Eh
+                gain = _top(C @ X) / np.sqrt(alpha)  # the input alpha S: S's block scaled
+                if CU_hi is not None:  # the input N(hi)
+                    Ch = CU_hi[np.ix_(at, at)]
+                    gain = min(gain, _top(((Ch + Ch.conj().T) / 2) @ X))
+                kappa += gain
                 Y = Eh @ self.Xq[Tk]
                 energy = np.sum(Y.conj() * (P @ Y), axis=0).real
             else:
                 E = _polynomial(K, D, M, sig, self.n)
                 apply, adjoint = self._loop(lu, s, k, E)
-                kappa += norm_in(apply, adjoint, S, solve, self.n, self.rng)
+                # worst cases (squared): alpha S loses 1 / alpha, N(hi) loses
+                # N(omega_k) / N(hi) <= alpha / alpha(hi)
+                if fresh and alpha / family.alpha(hi) < 1.0 / alpha:
+                    S_in, solve = S_hi, solve_hi
+                else:
+                    S_in, solve = family.scaled(shifted[k])
+                kappa += norm_in(apply, adjoint, S, solve, self.n, self.rng, S_in=S_in)
                 # G_C E_k X: the band's part from the precomputed projections
                 WEX = _dense_polynomial(self.many[k][2], sig, self.Xq.shape[1])
                 Z = np.asarray(lu.solve(np.asarray(E @ self.Xq, dtype=complex)))
@@ -578,7 +615,7 @@ class Scan:
         """Each band mode's coupling into the forces, in the dual of the energy norm:
         ``sum_k ||S^-1/2 E_k(s_j)^H w_j||`` with ``s_j = lambda_j - i k w1``."""
         assert self.weight is not None
-        _, solve = self.weight
+        solve = self.family.dual_solve()  # the smallest norm of the family: the largest duals
         band, Wv = self.band, self.Wv
         p = np.zeros(band.lam.size)
         for k, (Tk, K, D, M) in self.parts.items():
@@ -611,6 +648,13 @@ class Scan:
             rows_v = (0.0 if Dp is None else Dp) + (0.0 if Mp is None else sj * Mp)
             p += np.sqrt(np.sum(rows_q + np.abs(rows_v) ** 2, axis=1))
         return p
+
+
+def _top(A: np.ndarray) -> float:
+    """The square root of the largest real part of the eigenvalues of ``A`` (a product of
+    two Hermitian semidefinite blocks: its eigenvalues are real and nonnegative)."""
+    ev = np.linalg.eigvals(A)
+    return float(np.sqrt(max(float(np.max(ev.real, initial=0.0)), 0.0)))
 
 
 def _dense_polynomial(parts: Any, sig: complex, size: int) -> np.ndarray:
