@@ -133,11 +133,12 @@ def main() -> None:
                 t0 = time.perf_counter()
                 res = rl.floquet(p.assembled.system, band=band_modes)
                 band = res.info.get("band", {})
-                how = (
-                    f"kappa_C {band.get('kappa', float('nan')):.3g} ({band.get('norm', '-')} norm)"
-                    if band_modes
-                    else f"{res.method} method"
-                )
+                how = f"{res.method} method"
+                if band:  # the band method: its size and bound
+                    how += (
+                        f", band of {band.get('modes')} modes, kappa_C "
+                        f"{band.get('kappa', float('nan')):.3g} ({band.get('norm', '-')} norm)"
+                    )
                 rows.append((
                     label,
                     f"{time.perf_counter() - t0:.1f} s: {'stable' if res.stable else 'unstable'}, "

@@ -198,29 +198,15 @@ def _divided(solve: Any, a: float) -> Any:
 
 
 def energy_weight(K: Any, M: Any, radius: float) -> tuple[sp.csc_array, Any] | None:
-    """The norm the small-gain loop is measured in: ``||x||_S^2 = x^H S x`` with
-    ``S = K_s + mu M_s`` (``K_s``, ``M_s`` the Hermitian parts of the time-averaged ``K``,
-    ``M``), ``mu = (MU_FACTOR radius)^2`` raised by decades until ``S`` is positive definite;
-    ``(S, a function solving with S)``, or None when no ``mu`` up to ``1e8`` times that makes
-    it so.
-
-    The modes below ``radius`` (the band's) are weighed by their kinetic energy at that
-    frequency, those above by their strain energy: the loop ``G_C(s) E_k`` of a shaft whose
-    stiffness or mass varies by a fraction ``eps`` of itself then has a gain of about
-    ``eps`` whatever the mesh, where in the Euclidean norm of the DOFs it grows with the
-    stiffness ratio of the mesh (docs/stability.md, 8.3)."""
-    K, M = sp.csc_array(K), sp.csc_array(M)
-    Ks, Ms = ((X + X.conj().T) / 2 for X in (K, M))
-    if not (np.iscomplexobj(Ks.data) or np.iscomplexobj(Ms.data)):
-        Ks, Ms = Ks.real, Ms.real
-    mu = (MU_FACTOR * max(float(radius), 1e-300)) ** 2
-    for _ in range(9):
-        S = sp.csc_array(Ks + mu * Ms)
-        lu = definite_factor(S)
-        if lu is not None:
-            return S, _solver(lu, np.iscomplexobj(S.data))
-        mu *= 10.0
-    return None
+    """The energy norm ``||x||_S^2 = x^H S x`` with ``S = K_s + mu M_s`` (``K_s``, ``M_s``
+    the Hermitian parts of the time-averaged ``K``, ``M``), ``mu = (MU_FACTOR radius)^2``
+    raised by decades until ``S`` is positive definite: ``(S, a function solving with S)``,
+    or None when no ``mu`` up to ``1e8`` times that makes it so. It is the low-frequency
+    norm of :class:`EnergyFamily`, which the scan measures its loops in: the modes below
+    ``radius`` (the band's) weighed by their kinetic energy at that frequency, those above
+    by their strain energy (docs/stability.md, 8.3)."""
+    family = EnergyFamily(K, M, radius)
+    return (family.S, family.solve) if family.definite else None
 
 
 def _solver(lu: Any, complex_factor: bool) -> Any:
