@@ -80,6 +80,35 @@ def test_fine_rotor_has_the_unstable_verdict_of_the_three_node_model() -> None:
     assert abs(res.max_real - ref.max_real) <= 2e-3 * abs(ref.max_real)
 
 
+def test_continued_band_starts_at_the_last_speeds_size(monkeypatch) -> None:
+    """Over a run-up the band of the next speed starts at the size the last certified band
+    was asked for: the 335-node rotor inside its asymmetric-shaft band needs 80 modes (40 are
+    not certified); continued from 4220 to 4225 rpm it builds one band of 80, and its
+    verdict and largest real part are those of the 3-node model's dense Hill method there."""
+    from rheolin.floquet import Continuation
+    from rheolin.floquet import band as band_module
+
+    built: list[int] = []
+    original = band_module.BandAveraged
+
+    class Counted(original):  # type: ignore[misc, valid-type]
+        def __init__(self, system: rl.PeriodicSystem, modes: int = 40) -> None:
+            built.append(int(modes))
+            super().__init__(system, modes)
+
+    monkeypatch.setattr(band_module, "BandAveraged", Counted)
+    text = refined_example("rotor", 335)
+    cont = Continuation()
+    first = rl.floquet(_assembled(text, 4220.0).system, continuation=cont)
+    assert built == [40, 80] and first.info["band"]["modes"] == 80
+    built.clear()
+    res = rl.floquet(_assembled(text, 4225.0).system, continuation=cont)
+    assert built == [80] and res.info["band"]["certified"]
+    ref = rl.floquet(_assembled(refined_example("rotor", 3), 4225.0).system, 12, method="dense")
+    assert res.decided and not res.stable and not ref.stable
+    assert abs(res.max_real - ref.max_real) <= 2e-3 * abs(ref.max_real)
+
+
 @pytest.mark.parametrize("rpm", [3000.0, 4220.0])
 def test_band_method_matches_the_dense_method_below_the_limit(rpm: float) -> None:
     """A 41-node rotor (246 DOF) in its shaft's frame: the band method (40 modes) and the

@@ -143,6 +143,7 @@ class BandAveraged(Averaged):
         self.radius = float(np.max(np.abs(lam), initial=0.0))
         self.complement: Complement | None = None
         self.cpu: dict[str, float] = {}  # CPU seconds of band_modes' stages
+        self.asked = k  # the size asked for (band_modes: before a stall made it smaller)
         self._gershgorin = None
 
     def gershgorin(self, system: PeriodicSystem, modes: list[int]) -> list[float]:
@@ -255,15 +256,25 @@ def _left_vector(
 
 
 def band_modes(
-    system: PeriodicSystem, modes: int | None = None, budget: int | None = None
+    system: PeriodicSystem,
+    modes: int | None = None,
+    budget: int | None = None,
+    start: int | None = None,
 ) -> BandAveraged:
     """The band of :class:`BandAveraged` with its certificates (``complement``): the energy
     bound at the band's radius and the small-gain scan. Without ``modes`` the band doubles
-    from :data:`BAND_MODES` while a certificate fails or ``kappa_C`` exceeds
+    from :data:`BAND_MODES` (or from ``start``, the size a nearby speed's certified band was
+    asked for) while a certificate fails or ``kappa_C`` exceeds
     :data:`~rheolin.floquet.complement.KAPPA_LIMIT`, up to :data:`BAND_MAX_MODES` (and
     ``budget`` bytes; from :data:`BAND_KEEP` modes on, while it exceeds :data:`KEEP_LIMIT`);
-    the last one is returned, its ``complement`` saying what failed."""
-    k = BAND_MODES if modes is None else int(modes)
+    the last one is returned, its ``complement`` saying what failed, ``asked`` the size it
+    was asked for."""
+    if modes is not None:
+        k = int(modes)
+    elif start is not None:
+        k = min(max(int(start), BAND_MODES), BAND_MAX_MODES)
+    else:
+        k = BAND_MODES
     failed: list[float] = []  # kappa_C of the last bands in a row that failed (>= 1)
     cpu = {"arnoldi": 0.0, "scan": 0.0}  # CPU seconds of every band tried
     previous: BandAveraged | None = None

@@ -42,7 +42,9 @@ __all__ = [
     "energy_certificate",
     "energy_radius",
     "harmonic_dofs",
+    "scan_grid",
     "touched_dofs",
+    "visiting_order",
 ]
 
 #: The small-gain bound must stay below this (1 is the limit of the argument; the margin
@@ -51,6 +53,16 @@ KAPPA_LIMIT = 0.5
 
 #: Scan points per octave between the smallest and the largest frequency of the pencil.
 PER_OCTAVE = 3
+
+#: Below this fraction of the band's radius ``R`` the loop of the modes left out has no pole
+#: nearer than ``(1 - QUIET) R`` (every eigenvalue inside the radius is a band mode): the scan
+#: spaces its points there by the grid's fraction of that distance, not of the frequency, and
+#: goes to no time-averaged eigenvalue it finds there (:func:`scan_grid`).
+QUIET = 0.5
+
+#: Points of the scan between the band's radius and this many times it are visited first: the
+#: loop of a band too small for its limit peaks there, just above the radius.
+EDGE_SPAN = 4.0
 
 #: Power-iteration steps for a norm when the touched DOFs are too many for dense blocks.
 NORM_STEPS = 12
@@ -218,6 +230,42 @@ def _norm2(apply: Any, adjoint: Any, dim: int, rng: np.random.Generator) -> floa
             return value_new
         value = value_new
     return value
+
+
+def scan_grid(low: float, top: float, radius: float) -> np.ndarray:
+    """The scan's frequencies from ``low`` to ``top`` [rad/s] for a band of ``radius``:
+    :data:`PER_OCTAVE` points an octave from :data:`QUIET` times the radius up, and below it
+    steps of the same fraction (``2^(1/PER_OCTAVE) - 1``) of the distance ``radius - omega``
+    to the nearest pole the loop can have there.
+
+    >>> scan_grid(1.0, 64.0, 0.0).size  # no band: 3 an octave over 6 octaves
+    18
+    >>> g = scan_grid(1.0, 1e4, 1e3)
+    >>> g[:4].round(1).tolist(), g.size  # 3 points below 500 rad/s, where 30 were geometric
+    ([1.0, 260.7, 452.8, 595.1], 16)
+    """
+    spacing = 2.0 ** (1.0 / PER_OCTAVE) - 1.0
+    quiet: list[float] = []
+    omega = float(low)
+    while omega < QUIET * radius:
+        quiet.append(omega)
+        omega += spacing * (radius - omega)
+    count = max(int(np.ceil(PER_OCTAVE * np.log2(max(top / omega, 2.0)))), 2)
+    return np.concatenate([quiet, np.geomspace(omega, top, count)])
+
+
+def visiting_order(grid: np.ndarray, radius: float) -> np.ndarray:
+    """The order the scan visits ``grid`` in: its first point, then the points between the
+    band's radius and :data:`EDGE_SPAN` times it, then the rest, each part coarse to fine
+    (:func:`coarse_to_fine`): a failing band is found failing in a few points.
+
+    >>> visiting_order(np.array([0.1, 1.0, 2.0, 4.0, 8.0, 16.0]), 1.5).tolist()
+    [0, 2, 3, 4, 1, 5]
+    """
+    order = coarse_to_fine(grid.size)
+    rank = np.where((grid[order] >= radius) & (grid[order] <= EDGE_SPAN * radius), 0, 1)
+    rank[order == 0] = -1
+    return np.asarray(order[np.argsort(rank, kind="stable")])
 
 
 def coarse_to_fine(count: int) -> np.ndarray:
@@ -559,10 +607,9 @@ class Scan:
         # the lowest frequency stands for it (a tenth of the fundamental w1, when lower)
         lowest = float(np.min(np.abs(band.lam), initial=np.inf))
         low = max(lowest if np.isfinite(lowest) else self.w, 1e-6 * self.w) / 10
-        count = max(int(np.ceil(PER_OCTAVE * np.log2(max(top / low, 2.0)))), 2)
-        grid = np.geomspace(low, top, count)
+        grid = scan_grid(low, top, band.radius)
         if self.low < low / 2:
-            grid, count = np.concatenate([[self.low], grid]), count + 1
+            grid = np.concatenate([[self.low], grid])
         spacing = 2.0 ** (1.0 / PER_OCTAVE) - 1.0
         seen: dict[str, list[tuple[float, float, float]]] = {m: [] for m in norms}
         alive = set(norms)
@@ -579,7 +626,7 @@ class Scan:
                         alive.discard(name)
             return lu
 
-        for omega in grid[coarse_to_fine(count)]:
+        for omega in grid[visiting_order(grid, band.radius)]:
             lu = visit(omega)
             if not alive:
                 break
@@ -589,7 +636,8 @@ class Scan:
             if not np.isfinite(mu) or mu.imag <= 0:
                 continue
             near_band = np.min(np.abs(band.lam - mu), initial=np.inf) <= 1e-6 * abs(mu)
-            if not near_band and abs(mu.real) < spacing * mu.imag:
+            inside = abs(mu) < QUIET * band.radius  # a band mode: no pole of the loop
+            if not (near_band or inside) and abs(mu.real) < spacing * mu.imag:
                 extra.append(float(mu.imag))
         else:
             for omega in sorted(set(np.round(extra, 9))):

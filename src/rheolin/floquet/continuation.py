@@ -85,7 +85,18 @@ class Continuation:
 
     def __init__(self, rtol: float | None = None) -> None:
         self._kept: dict[tuple[int, int], tuple[np.ndarray, LatticeExponents]] = {}
+        self._band: tuple[int, int] | None = None
         self.rtol = rtol
+
+    def band_start(self, n: int) -> int | None:
+        """The band size the last certified band of a system of ``n`` DOFs was asked for
+        (None: none): the next speed's band starts there, not at the smallest size that the
+        last speed already outgrew (:func:`~rheolin.floquet.band.band_modes`)."""
+        return self._band[1] if self._band is not None and self._band[0] == n else None
+
+    def keep_band(self, n: int, asked: int | None) -> None:
+        """Remember the size a certified band of ``n`` DOFs was asked for (None: forget)."""
+        self._band = None if asked is None else (n, int(asked))
 
     def start(self, n: int, lattice: Lattice) -> LatticeExponents | None:
         """The kept search on ``lattice`` for a system of ``n`` DOFs (None: none)."""

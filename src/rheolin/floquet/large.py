@@ -122,14 +122,20 @@ def band_info(modes: Any, rotated: list[str]) -> dict[str, Any]:
     return out
 
 
-def certified_band(system: PeriodicSystem, band: int | None, budget: Any, order: int) -> Any:
-    """The certified band of a large model (:func:`~rheolin.floquet.band.band_modes`),
-    refused with :class:`~rheolin.budget.MemoryBudgetError` before anything is built when the
-    first band and the lattice search at ``order`` exceed the memory budget."""
+def certified_band(
+    system: PeriodicSystem, band: int | None, budget: Any, order: int, start: int | None = None
+) -> Any:
+    """The certified band of a large model (:func:`~rheolin.floquet.band.band_modes`; its
+    size doubling from ``start`` when given), refused with
+    :class:`~rheolin.budget.MemoryBudgetError` before anything is built when the first band
+    and the lattice search at ``order`` exceed the memory budget (a ``start`` that does not
+    fit is dropped)."""
     from ..linalg.threads import single_thread_blas
 
     limit = resolve_budget(budget)
-    estimate = band_estimate(system, order, band)
+    if band is None and start is not None and band_estimate(system, order, start) > limit:
+        start = None
+    estimate = band_estimate(system, order, band if band is not None else start)
     if estimate > limit:
         raise MemoryBudgetError(
             f"the band method ({2 * system.n} first-order DOFs, lattice order {order}) needs "
@@ -138,7 +144,7 @@ def certified_band(system: PeriodicSystem, band: int | None, budget: Any, order:
             "coarsely, or raise the budget (RHEOLIN_MEMORY_BUDGET or `memory_budget`)"
         )
     with single_thread_blas():  # many small products: one thread
-        return band_modes(system, band, limit)
+        return band_modes(system, band, limit, start=start)
 
 
 def inertial_exponents(

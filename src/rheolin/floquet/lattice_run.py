@@ -94,7 +94,13 @@ def _lattice_auto(
     limit = resolve_budget(budget)
     p = DEFAULT_LATTICE_ORDER if order is None else int(order)
     top = max(MAX_AUTO_ORDER, DEFAULT_LATTICE_ORDER)
-    modes = large.certified_band(system, band, budget, p) if large.uses_band(system, band) else None
+    modes = None
+    if large.uses_band(system, band):
+        start = continuation.band_start(system.n) if continuation is not None else None
+        modes = large.certified_band(system, band, budget, p, start)
+        if continuation is not None:  # the next speed's band starts at this size
+            kept = band is None and not large.band_failed(modes)
+            continuation.keep_band(system.n, modes.asked if kept else None)
     lat = floquet_lattice(system, p, max_size=10**6, avg=modes)  # one band for both
     res = floquet_on_lattice(
         system, lat, budget=budget, near=near, continuation=continuation, modes=modes,
