@@ -234,24 +234,26 @@ def _norm2(apply: Any, adjoint: Any, dim: int, rng: np.random.Generator) -> floa
 
 def scan_grid(low: float, top: float, radius: float) -> np.ndarray:
     """The scan's frequencies from ``low`` to ``top`` [rad/s] for a band of ``radius``:
-    :data:`PER_OCTAVE` points an octave from :data:`QUIET` times the radius up, and below it
-    steps of the same fraction (``2^(1/PER_OCTAVE) - 1``) of the distance ``radius - omega``
+    the points of a grid of :data:`PER_OCTAVE` an octave from :data:`QUIET` times the radius
+    up, and below it steps of the same fraction (``2^(1/PER_OCTAVE) - 1``) of the distance ``radius - omega``
     to the nearest pole the loop can have there.
 
     >>> scan_grid(1.0, 64.0, 0.0).size  # no band: 3 an octave over 6 octaves
     18
     >>> g = scan_grid(1.0, 1e4, 1e3)
     >>> g[:4].round(1).tolist(), g.size  # 3 points below 500 rad/s, where 30 were geometric
-    ([1.0, 260.7, 452.8, 595.1], 16)
+    ([1.0, 260.7, 452.8, 587.8], 16)
     """
     spacing = 2.0 ** (1.0 / PER_OCTAVE) - 1.0
+    count = max(int(np.ceil(PER_OCTAVE * np.log2(max(top / low, 2.0)))), 2)
+    octaves = np.geomspace(low, top, count)
     quiet: list[float] = []
     omega = float(low)
     while omega < QUIET * radius:
         quiet.append(omega)
         omega += spacing * (radius - omega)
-    count = max(int(np.ceil(PER_OCTAVE * np.log2(max(top / omega, 2.0)))), 2)
-    return np.concatenate([quiet, np.geomspace(omega, top, count)])
+    # the octave grid's own points above: the eigenvalues the scan goes to are found from them
+    return np.concatenate([quiet, octaves[octaves >= QUIET * radius]])
 
 
 def visiting_order(grid: np.ndarray, radius: float) -> np.ndarray:
