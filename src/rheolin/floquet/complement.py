@@ -235,8 +235,8 @@ def _norm2(apply: Any, adjoint: Any, dim: int, rng: np.random.Generator) -> floa
 def scan_grid(low: float, top: float, radius: float) -> np.ndarray:
     """The scan's frequencies from ``low`` to ``top`` [rad/s] for a band of ``radius``:
     the points of a grid of :data:`PER_OCTAVE` an octave from :data:`QUIET` times the radius
-    up, and below it steps of the same fraction (``2^(1/PER_OCTAVE) - 1``) of the distance ``radius - omega``
-    to the nearest pole the loop can have there.
+    up, and below it steps of the same fraction (``2^(1/PER_OCTAVE) - 1``) of the distance
+    ``radius - omega`` to the nearest pole the loop can have there.
 
     >>> scan_grid(1.0, 64.0, 0.0).size  # no band: 3 an octave over 6 octaves
     18
