@@ -54,6 +54,9 @@ KAPPA_LIMIT = 0.5
 #: Scan points per octave between the smallest and the largest frequency of the pencil.
 PER_OCTAVE = 3
 
+#: The octave grid's step as a fraction of the frequency, ``2^(1/PER_OCTAVE) - 1``.
+SPACING = 2.0 ** (1.0 / PER_OCTAVE) - 1.0
+
 #: Below this fraction of the band's radius ``R`` the loop of the modes left out has no pole
 #: nearer than ``(1 - QUIET) R`` (every eigenvalue inside the radius is a band mode): the scan
 #: spaces its points there by the grid's fraction of that distance, not of the frequency, and
@@ -235,7 +238,7 @@ def _norm2(apply: Any, adjoint: Any, dim: int, rng: np.random.Generator) -> floa
 def scan_grid(low: float, top: float, radius: float) -> np.ndarray:
     """The scan's frequencies from ``low`` to ``top`` [rad/s] for a band of ``radius``:
     the points of a grid of :data:`PER_OCTAVE` an octave from :data:`QUIET` times the radius
-    up, and below it steps of the same fraction (``2^(1/PER_OCTAVE) - 1``) of the distance
+    up, and below it steps of the same fraction (:data:`SPACING`) of the distance
     ``radius - omega`` to the nearest pole the loop can have there.
 
     >>> scan_grid(1.0, 64.0, 0.0).size  # no band: 3 an octave over 6 octaves
@@ -244,14 +247,13 @@ def scan_grid(low: float, top: float, radius: float) -> np.ndarray:
     >>> g[:4].round(1).tolist(), g.size  # 3 points below 500 rad/s, where 30 were geometric
     ([1.0, 260.7, 452.8, 587.8], 16)
     """
-    spacing = 2.0 ** (1.0 / PER_OCTAVE) - 1.0
     count = max(int(np.ceil(PER_OCTAVE * np.log2(max(top / low, 2.0)))), 2)
     octaves = np.geomspace(low, top, count)
     quiet: list[float] = []
     omega = float(low)
     while omega < QUIET * radius:
         quiet.append(omega)
-        omega += spacing * (radius - omega)
+        omega += SPACING * (radius - omega)
     # the octave grid's own points above: the eigenvalues the scan goes to are found from them
     return np.concatenate([quiet, octaves[octaves >= QUIET * radius]])
 
@@ -612,7 +614,6 @@ class Scan:
         grid = scan_grid(low, top, band.radius)
         if self.low < low / 2:
             grid = np.concatenate([[self.low], grid])
-        spacing = 2.0 ** (1.0 / PER_OCTAVE) - 1.0
         seen: dict[str, list[tuple[float, float, float]]] = {m: [] for m in norms}
         alive = set(norms)
         extra: list[float] = []
@@ -639,7 +640,7 @@ class Scan:
                 continue
             near_band = np.min(np.abs(band.lam - mu), initial=np.inf) <= 1e-6 * abs(mu)
             inside = abs(mu) < QUIET * band.radius  # a band mode: no pole of the loop
-            if not (near_band or inside) and abs(mu.real) < spacing * mu.imag:
+            if not (near_band or inside) and abs(mu.real) < SPACING * mu.imag:
                 extra.append(float(mu.imag))
         else:
             for omega in sorted(set(np.round(extra, 9))):

@@ -133,9 +133,11 @@ def certified_band(
     from ..linalg.threads import single_thread_blas
 
     limit = resolve_budget(budget)
-    if band is None and start is not None and band_estimate(system, order, start) > limit:
-        start = None
+    start = None if band is not None else start
     estimate = band_estimate(system, order, band if band is not None else start)
+    if start is not None and estimate > limit:  # the smallest band instead
+        start = None
+        estimate = band_estimate(system, order)
     if estimate > limit:
         raise MemoryBudgetError(
             f"the band method ({2 * system.n} first-order DOFs, lattice order {order}) needs "
