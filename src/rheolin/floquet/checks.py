@@ -6,7 +6,6 @@ agreement between two truncations (the Gershgorin discs are the averaged modes':
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..harmonics.hill import dense
 from ..harmonics.hill_lattice import LatticeHill
@@ -68,16 +67,17 @@ class Outer:
         """Without a complete modal basis (massless DOFs, or a band of modes): one LU of
         ``Q0(s)`` per outer harmonic."""
         block = self.hill.blocks[0]
-        rows, cols, (K, D, M) = block.entries()
+        rows, cols, (K, D, M) = block.entries()  # in CSC order, no duplicates
         n = self.hill.n
+        indptr = np.searchsorted(cols, np.arange(n + 1))
         total = 0j
         weight = np.linalg.norm(a, axis=1) * np.linalg.norm(r, axis=1)
         keep = np.flatnonzero(weight > 1e-14 * max(weight.max(), np.finfo(float).tiny))
         for i in keep:
             s = s_o[i]
-            Q0 = sp.csc_array((K + s * D + s * s * M, (rows, cols)), shape=(n, n))
             try:
-                z = self.factor(Q0).solve(np.asarray(r[i], dtype=complex))
+                lu = self.factor.pattern(K + s * D + s * s * M, rows, indptr)
+                z = lu.solve(np.asarray(r[i], dtype=complex))
             except RuntimeError:
                 return complex("inf")
             total += a[i] @ z

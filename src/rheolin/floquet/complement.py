@@ -32,7 +32,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..system.periodic import PeriodicSystem
-from .energy_norm import SAME_INPUT, EnergyFamily, norm_in, positive_definite
+from .energy_norm import (
+    SAME_INPUT,
+    EnergyFamily,
+    apply_norm,
+    column_energies,
+    norm_in,
+    positive_definite,
+)
 from .shift_invert import PatternLU
 
 __all__ = [
@@ -431,7 +438,7 @@ class Scan:
             # C_k E^H P E^ with P = (G_C J_U)^H N (G_C J_U) on T_k (C_k = J^T N_in^-1 J: the
             # smallest input energy of a state with given values on T_k); q_S from the same P
             GU = np.asarray(lu.solve(self.JU.astype(complex))) - self.Xq @ (c[:, None] * self.WvH_U)
-            PU = GU.conj().T @ (S @ GU)
+            PU = GU.conj().T @ apply_norm(S, GU)
             if fresh:
                 CU_hi = np.asarray(solve_hi(self.JU))[self.U]
         for k, (Tk, K, D, M) in self.parts.items():
@@ -465,7 +472,7 @@ class Scan:
                 WEX = _dense_polynomial(self.many[k][2], sig, self.Xq.shape[1])
                 Z = np.asarray(lu.solve(np.asarray(E @ self.Xq, dtype=complex)))
                 Z -= self.Xq @ (c[:, None] * WEX)
-                energy = np.sum(Z.conj() * (S @ Z), axis=0).real
+                energy = column_energies(S, Z)
             qs += float(np.sum(np.sqrt(np.maximum(energy, 0.0))))
         return kappa, qs
 

@@ -115,7 +115,13 @@ class Ordered:
         return csc_pattern_key(Q.indptr, Q.indices) == self.key
 
     def factor(self, Q: sp.csc_array) -> OrderedLU:
-        B = sp.csc_array((Q.data[self.gather], self.indices, self.indptr), shape=Q.shape)
+        return self.factor_values(Q.data)
+
+    def factor_values(self, data: np.ndarray) -> OrderedLU:
+        """The factor of the matrix of this pattern with the values ``data`` (in its CSC
+        order)."""
+        size = self.p.size
+        B = sp.csc_array((data[self.gather], self.indices, self.indptr), shape=(size, size))
         opts = {**SPLU, "permc_spec": "NATURAL"}
         return OrderedLU(spla.splu(B, **opts), self.p)
 
@@ -146,6 +152,15 @@ class PatternLU:
         lu = spla.splu(Q, **SPLU)
         self.ordered = Ordered(Q, lu.perm_c)
         return lu
+
+    def pattern(self, data: np.ndarray, indices: np.ndarray, indptr: np.ndarray) -> Any:
+        """The factor of the CSC matrix ``(data, indices, indptr)`` whose pattern stays the
+        same from call to call (the caller's promise: it is not compared, and the matrix is
+        built only for the first factor, whose ordering the others reuse)."""
+        if self.ordered is None:
+            size = indptr.size - 1
+            return self(sp.csc_array((data, indices, indptr), shape=(size, size)))
+        return self.ordered.factor_values(data)
 
 
 def superlu(hill: LatticeHill, Q: sp.csc_array) -> Any:
