@@ -4,7 +4,7 @@ For the example gearbox with finely meshed shafts at 3000 rpm, each band size gi
 computed (``BandAveraged``) and scanned in the energy norm over the whole grid (no early stop,
 as ``Scan.scan`` with an infinite stop): the largest ``kappa_C``, where it is, the band's
 radius and the CPU seconds. ``--split`` evaluates the loop at a few frequencies for other
-splits of the band's ``1/s`` tail (``rheolin.floquet.complement.SPLIT``) with the last band.
+splits of the band's ``1/s`` tail (``rheolin.floquet.scan.SPLIT``) with the last band.
 
 Usage::
 
@@ -21,7 +21,7 @@ import numpy as np
 
 from rheolin.data.fine import refined_example
 from rheolin.floquet import band as B
-from rheolin.floquet import complement as C
+from rheolin.floquet import scan as C
 from rheolin.io import parse_model
 
 

@@ -22,7 +22,7 @@ import rheolin as rl
 from rheolin.data import example_text
 from rheolin.floquet.averaged import Averaged
 from rheolin.floquet.band import BandAveraged, _top_frequency, certify
-from rheolin.floquet.complement import Scan
+from rheolin.floquet.scan import Scan
 from rheolin.io import parse_model
 
 RPM = np.pi / 30
@@ -63,7 +63,7 @@ def test_complement_is_the_sum_over_the_modes_left_out(gearbox, monkeypatch) -> 
     modes left out, in and off the right half-plane, for every harmonic (each taken as
     touching many DOFs: ``LOW_RANK`` 0); ``G_C`` decays as ``1/s^2`` as a second-order
     transfer function does (the band's ``1/s`` tail is split off)."""
-    monkeypatch.setattr(importlib.import_module("rheolin.floquet.complement"), "LOW_RANK", 0)
+    monkeypatch.setattr(importlib.import_module("rheolin.floquet.scan"), "LOW_RANK", 0)
     band = BandAveraged(gearbox, 40)
     scan = Scan(gearbox, band)
     assert scan.many
@@ -153,7 +153,7 @@ def test_loop_gain_in_the_energy_norm_matches_the_dense_norm(
     for the others (Lanczos), both ways for every harmonic; against the dense operator norms
     ``||L_out^H G_C E_k L_in^-H||_2`` (``N = L L^H``), and ``q_S = sum_k sum_m ||G_C(s) E_k
     x_m||_N(omega)`` over the band's displacement vectors against the same dense products."""
-    monkeypatch.setattr(importlib.import_module("rheolin.floquet.complement"), "LOW_RANK", low_rank)
+    monkeypatch.setattr(importlib.import_module("rheolin.floquet.scan"), "LOW_RANK", low_rank)
     band = BandAveraged(gearbox, 80)
     scan = Scan(gearbox, band)
     assert scan.weight is not None and scan.family.varying
@@ -309,7 +309,7 @@ def test_the_scan_below_half_the_band_radius_misses_no_peak(gearbox) -> None:
     had a dozen. On the gearbox with 80 band modes, the loop's ``kappa_C`` and ``q_S`` (dense
     sums over the modes left out) on 150 frequencies below ``QUIET R`` rise by at most 1 %
     above their largest value at the scan's points there (and the first point above)."""
-    from rheolin.floquet.complement import PER_OCTAVE, QUIET, scan_grid
+    from rheolin.floquet.scan_grid import PER_OCTAVE, QUIET, scan_grid
 
     band = BandAveraged(gearbox, 80)
     scan = Scan(gearbox, band)

@@ -34,16 +34,14 @@ from ..harmonics.hill import state_scaling
 from ..system.periodic import PeriodicSystem
 from .averaged import MAX_AVERAGED_DENSE, Averaged
 from .complement import (
-    DENSE_TOUCHED,
     KAPPA_LIMIT,
-    LOW_RANK,
     Complement,
-    Scan,
     energy_certificate,
     harmonic_dofs,
     touched_dofs,
 )
 from .result import EPS
+from .scan import DENSE_TOUCHED, LOW_RANK, Scan
 from .shift_invert import LU_FILL
 
 __all__ = [
@@ -366,9 +364,9 @@ def band_memory(system: PeriodicSystem, modes: int = BAND_MODES) -> int:
     """Estimated peak memory [bytes] of :func:`band_modes` with ``modes`` modes: the LU of
     ``K_0`` (at the lattice search's fill), the two Arnoldi bases, the band's vectors and the
     scan's factor and transfer blocks (dense up to
-    :data:`~rheolin.floquet.complement.DENSE_TOUCHED` touched DOFs, else blocks of the band's
+    :data:`~rheolin.floquet.scan.DENSE_TOUCHED` touched DOFs, else blocks of the band's
     width, and the energy norm's blocks of that width:
-    :class:`~rheolin.floquet.complement.Scan`)."""
+    :class:`~rheolin.floquet.scan.Scan`)."""
     n = system.n
     K, D, M = _parts(system)
     nnz = int((abs(K) + abs(D) + abs(M)).nnz)
@@ -376,7 +374,7 @@ def band_memory(system: PeriodicSystem, modes: int = BAND_MODES) -> int:
     touched = touched_dofs(system).size
     dense = min(touched, DENSE_TOUCHED)
     # blocks of the band's width: the balanced norm's above DENSE_TOUCHED, the energy norm's
-    # responses of the band's vectors and their dual norms (complement.Scan) always
+    # responses of the band's vectors and their dual norms (scan.Scan) always
     blocks = (4 if touched > DENSE_TOUCHED else 0) * n * modes * 16 + 6 * n * modes * 16
     # the band's left vectors on the DOFs of each harmonic touching many (a flat shaft), twice
     blocks += sum(2 * t * modes * 16 for t in harmonic_dofs(system) if t > LOW_RANK)
