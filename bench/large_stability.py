@@ -12,6 +12,8 @@ how the solve went (method, gmres strategy, iterations, harmonics). A verdict th
 
 * the example rotor on ``--rotor`` shaft nodes (``6 N`` DOF) at 3000 and 4220 rpm;
 * the gearbox with every shaft element split (``--gearbox`` DOFs, rheolin.data.fine);
+* ``--also-solve 2:138 3:200``: each gearbox row's solve again with those harmonic sets
+  (closure order and largest order of the input speed), beside its verdict;
 * ``--runup N``: the gearbox (``--runup-dof`` DOFs) over N speeds from 1000 to 5000 rpm, a
   solve and a verdict at each (a :class:`~rheolin.floquet.Continuation`), and the 200-speed
   map projected from them; ``--runup-speeds RPM...`` at those speeds instead (``--rotor
@@ -60,6 +62,42 @@ def timed(fn: Any) -> tuple[Any, float, float, float]:
     return out, wall, cpu, max(status_kb("VmHWM") - base, 0) / 1024
 
 
+#: CPU seconds of the last row's verdict (for the extra solves of ``--also-solve``).
+LAST_VERDICT: dict[str, float] = {}
+
+
+def also_solve(text: str, rpm: float, sets: list[str]) -> list[str]:
+    """The model's solve with each of ``sets`` (``ORDER:MAX_ORDER``, ``MAX_ORDER`` ``none``:
+    uncapped) beside the last row's verdict: harmonics, CPU s, peak MB, verdict / solve. A
+    solve the memory budget refuses is recorded as such."""
+    model = parse_model(text).model
+    verdict = LAST_VERDICT.get("cpu", float("nan"))
+    lines = []
+    for spec in sets:
+        o_text, _, mo_text = spec.partition(":")
+        o, mo = int(o_text), (None if mo_text in ("", "none") else float(mo_text))
+        gc.collect()
+        try:
+            point, _, cpu, peak = timed(
+                lambda o=o, mo=mo: solve_point(
+                    model, rpm * RPM, order=o, max_order=mo, stability=False
+                )
+            )
+        except Exception as exc:  # a refusal (memory, harmonics) is a result here
+            lines.append(f"| - | {spec} | - | - | - | {type(exc).__name__}: {str(exc)[:120]} |")
+            print(lines[-1], flush=True)
+            continue
+        sol = point.solution
+        n = point.assembled.system.n
+        ok = "" if sol.success else ", failed"
+        lines.append(
+            f"| {n:,} | {spec} | {sol.harmonics.size} | {cpu:.2f} | {peak:.0f} | "
+            f"{verdict / max(cpu, 1e-9):.2f}{ok} |"
+        )
+        print(lines[-1], flush=True)
+    return lines
+
+
 def row(name: str, text: str, rpm: float, order: int | None, max_order: float | None) -> str:
     lm = parse_model(text)
     model = lm.model
@@ -89,6 +127,7 @@ def row(name: str, text: str, rpm: float, order: int | None, max_order: float | 
     stages = band.get("cpu") or {}
     arnoldi, scan = stages.get("arnoldi", float("nan")), stages.get("scan", float("nan"))
     search = f_cpu - (arnoldi + scan if stages else 0.0)
+    LAST_VERDICT["cpu"] = f_cpu
     verdict = ("stable" if res.stable else "unstable") + ("" if res.decided else ", undecided")
     line = solved + (
         f"{f_wall:.2f} / {f_cpu:.2f} | {arnoldi:.2f} | {scan:.2f} | {search:.2f} | "
@@ -160,6 +199,9 @@ def main() -> None:
     ap.add_argument("--runup-dof", type=int, default=None, help="run-up DOFs (first --gearbox)")
     ap.add_argument("--runup-speeds", type=float, nargs="*", default=[],
                     help="the run-up's speeds [rpm] (instead of --runup's 1000-5000)")  # fmt: skip
+    ap.add_argument("--also-solve", nargs="*", default=[], metavar="ORDER:MAX_ORDER",
+                    help="gearbox rows: the solve again with these harmonic sets, beside the "
+                    "verdict (e.g. 2:138 3:200)")  # fmt: skip
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
     head = (
@@ -177,13 +219,27 @@ def main() -> None:
     )
     command = f"{threads} python bench/large_stability.py " + " ".join(sys.argv[1:])
     rows: list[str] = []
+    extra: list[str] = []
 
     def write(tail: str = "") -> str:
         """The results so far (written after every row: a run cut short keeps its rows)."""
+        others = ""
+        if extra:
+            others = (
+                "The verdict of each gearbox row beside the solve of the same model with other "
+                "harmonic sets (`--also-solve`; closure order : largest order of the input "
+                "speed):\n\n| DOF | order : max order | harmonics | solve CPU s | solve peak MB "
+                "| verdict / solve |\n|---|---|---|---|---|---|\n" + "\n".join(extra) + "\n\n"
+            )
         text = (
             "# Floquet verdicts past the dense limit\n\n"
             f"`{command}`, one process on a shared 2-core machine (wall times vary with the "
-            "load; CPU times are this process's).\n\n" + head + "\n".join(rows) + "\n\n" + tail
+            "load; CPU times are this process's).\n\n"
+            + head
+            + "\n".join(rows)
+            + "\n\n"
+            + others
+            + tail
         )
         if args.out:
             Path(args.out).write_text(text)
@@ -199,6 +255,8 @@ def main() -> None:
         text = refined_example("gearbox", dof=dof)
         for rpm in args.gearbox_speeds:
             rows.append(row("gearbox, fine shafts", text, rpm, args.order, args.max_order))
+            if args.also_solve:
+                extra += also_solve(text, rpm, args.also_solve)
             write()
     tail = ""
     if (args.runup or args.runup_speeds) and args.gearbox:
