@@ -115,9 +115,10 @@ def preflight(
             f"{where}: order {order}"
             + ("" if max_order is None else f" with max_order {max_order:g}")
             + f" grows the harmonic set past {max_size:,} harmonics, the most that fit the "
-            f"memory budget of {format_bytes(limit)} with {n} DOF (a solve holds at least "
-            f"{format_bytes(per_harmonic)} per harmonic: {VECTORS_PER_HARMONIC} complex "
-            "vectors and its share of the GMRES basis); lower `order` or set `max_order` "
+            f"memory budget of {format_bytes(limit)} with {n} DOF (a solve holds up to "
+            f"{format_bytes(per_harmonic)} per harmonic: at least {VECTORS_PER_HARMONIC} "
+            "complex vectors, and a GMRES basis that grows with its iterations up to its "
+            "restart length); lower `order` or set `max_order` "
             "(or raise RHEOLIN_SOLVE_MEMORY)"
         ) from None
     except ValueError as exc:
