@@ -199,6 +199,10 @@ def test_map_on_workers_against_mathieu() -> None:
     assert [x for _, x in sorted(seen)] == smap.max_real.tolist()
     alone = stability_map(model, speeds, harmonics=H, refine=1e-6)
     assert smap.state.tolist() == alone.state.tolist()
-    np.testing.assert_allclose(smap.max_real, alone.max_real, rtol=1e-9, atol=1e-9)
+    # each largest real part within 1e-9 of the other, or within its stated tolerance: at the
+    # stable speeds it is the neutral rotation's exponent, zero to rounding (2e-8 to 1.2e-7,
+    # depending on the BLAS threads of the process; stated tolerance 7e-6 and 1.4e-5)
+    gap = np.abs(smap.max_real - alone.max_real)
+    assert np.all(gap <= np.maximum(1e-9 * np.abs(alone.max_real), alone.tol)), (gap, alone.tol)
     with pytest.raises(ValueError, match="workers"):
         stability_map(model, speeds, workers=0)
