@@ -296,3 +296,33 @@ def test_cli_refuses_a_model_too_large_for_the_band_method(tmp_path: Path) -> No
     text = done.stdout + done.stderr
     assert "estimated" in text and "RHEOLIN_MEMORY_BUDGET" in text
     assert not (tmp_path / "o" / "results.nc").exists()
+
+
+def test_a_finer_order_past_the_budget_is_a_note_not_an_error(monkeypatch) -> None:
+    """Raising the lattice order of an undecided band verdict checks the finer lattice with
+    the band's memory, as the search itself does: past the budget the verdict stays
+    undecided with a note naming the estimate (the 100,026-DOF gearbox with a 20 GB budget
+    raised MemoryBudgetError, 24.8 GB for order 2 with its band, from ``rl.floquet``)."""
+    from rheolin.floquet import lattice_run
+
+    calls: list[int] = []
+
+    class Undecided:
+        decided, stable = False, True
+
+        def __init__(self) -> None:
+            self.info: dict = {"seconds": 0.0}
+
+    def search(system, lattice, **kwargs):  # the order-1 verdict, then the real budget check
+        calls.append(lattice.order)
+        if len(calls) > 1:
+            raise MemoryBudgetError("the finer lattice with its band does not fit")
+        return Undecided()
+
+    monkeypatch.setattr(lattice_run, "floquet_on_lattice", search)
+    monkeypatch.setattr(lattice_run.large, "band_failed", lambda modes: False)
+    monkeypatch.setattr(lattice_run, "band_memory", lambda system, modes: 10**15)
+    system = _assembled(refined_example("rotor", 335), 3000.0).system
+    res = lattice_run.lattice_auto(system, None, None, refine=True)
+    assert calls == [1]
+    assert "order 2" in res.info["note"] and "memory budget" in res.info["note"]

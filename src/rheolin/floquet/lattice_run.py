@@ -112,9 +112,15 @@ def _lattice_auto(
         if res.stable and large.band_failed(modes):
             break  # a finer lattice cannot bound the modes the band leaves out
         finer = floquet_lattice(system, p + 1, max_size=10**6, avg=modes)
-        if lattice_memory(system, finer) > limit:
-            more = f"undecided at lattice order {p}; order {p + 1} would exceed the memory budget"
-            res.info["note"] = more
+        need = lattice_memory(system, finer)  # what floquet_on_lattice checks: the band too
+        if isinstance(modes, BandAveraged):
+            need += band_memory(system, int(modes.lam.size))
+        if need > limit:
+            res.info["note"] = (
+                f"undecided at lattice order {p}; order {p + 1} ({len(finer)} harmonics) "
+                f"would need an estimated {format_bytes(need)}, more than the memory budget "
+                f"of {format_bytes(limit)}"
+            )
             break
         log.info("floquet: order %d undecided; refining to order %d", p, p + 1)
         tried.append(p)
