@@ -112,9 +112,7 @@ def _lattice_auto(
         if res.stable and large.band_failed(modes):
             break  # a finer lattice cannot bound the modes the band leaves out
         finer = floquet_lattice(system, p + 1, max_size=10**6, avg=modes)
-        need = lattice_memory(system, finer)  # what floquet_on_lattice checks: the band too
-        if isinstance(modes, BandAveraged):
-            need += band_memory(system, int(modes.lam.size))
+        need = search_memory(system, finer, modes)  # what floquet_on_lattice checks
         if need > limit:
             res.info["note"] = (
                 f"undecided at lattice order {p}; order {p + 1} ({len(finer)} harmonics) "
@@ -135,6 +133,15 @@ def _lattice_auto(
     return res
 
 
+def search_memory(system: PeriodicSystem, lattice: Lattice, modes: Any = None) -> int:
+    """Estimated peak memory [bytes] of the search on ``lattice``, with the band of
+    ``modes`` when it is one (:func:`~rheolin.floquet.band.band_memory`)."""
+    est = lattice_memory(system, lattice)
+    if isinstance(modes, BandAveraged):
+        est += band_memory(system, int(modes.lam.size))
+    return est
+
+
 def floquet_on_lattice(
     system: PeriodicSystem,
     lattice: Lattice,
@@ -150,12 +157,11 @@ def floquet_on_lattice(
     with ``rtol``, the leading exponent refined when the verdict is decided or ``last`` (no
     finer order follows)."""
     t0 = time.perf_counter()
-    est = lattice_memory(system, lattice)
+    est = search_memory(system, lattice, modes)
     # what stays alive while finer lattices are searched near open clusters: this lattice's
     # operators and vectors and the band's modes; the finer searches get the budget's rest
     held = lattice_memory(system, lattice, searching=False)
     if isinstance(modes, BandAveraged):
-        est += band_memory(system, int(modes.lam.size))
         held += band_vectors(system, int(modes.lam.size))
     limit = resolve_budget(budget)
     kept = 0
