@@ -51,6 +51,50 @@ def test_rows_strategy_matches_the_assembled_coupled_system(monkeypatch) -> None
     assert _rel(sol.q, ref.q) < 1e-10
 
 
+def _chain_system(variation: float) -> rl.PeriodicSystem:
+    """300 DOFs, stiffness varying by ``variation`` of itself at 1x on every DOF (the
+    ``full`` strategy: its basis is the whole half vector)."""
+    n = 300
+    main = 2.0 + np.linspace(0.0, 1.0, n)
+    K0 = sp.csr_array(sp.diags_array([-np.ones(n - 1), main, -np.ones(n - 1)], offsets=[-1, 0, 1]))
+    K1 = sp.csr_array(sp.diags_array(variation * main.astype(complex)))
+    M0, D0 = sp.csr_array(sp.eye_array(n)), sp.csr_array(0.02 * sp.eye_array(n))
+    f = np.zeros(n, dtype=complex)
+    f[5::10] = np.exp(0.3j * np.arange(30))
+    return rl.PeriodicSystem(0.9, M={0: M0}, D={0: D0}, K={0: K0, 1: K1, -1: K1}, f={1: f})
+
+
+def test_a_budget_too_small_for_the_full_gmres_basis_shortens_its_restart(monkeypatch) -> None:
+    """The basis of 61 vectors does not fit the budget; one of 21 (and the factors) does: the
+    solve runs with the longest restart that fits, says so, and matches the sparse LU of the
+    coupled matrix. A budget short of even that restart is refused before the solve."""
+    from rheolin.budget import MemoryBudgetError
+    from rheolin.linalg.memory import MIN_RESTART, SolveMemory
+    from rheolin.solvers import krylov
+
+    monkeypatch.setattr(krylov, "PROBE_ITERATIONS", 10**6)  # not switched to ``band``
+    system, H = _chain_system(0.04), rl.HarmonicSet.full(8)
+    half = 9
+    shortest = SolveMemory(system.n, half, system.n, restart=MIN_RESTART).total
+    free = rl.solve(system, H, method="gmres", backend="lu", stability=False, rtol=1e-12)
+    assert free.info["restart"] == 60
+    vector = 2 * half * system.n * 8  # one real Krylov vector of the half set
+    budget = free.info["memory_estimate"] - 35 * vector  # the basis of 61 less 35 vectors
+    ref = rl.solve(system, H, method="direct", stability=False)
+    sol = rl.solve(
+        system, H, method="gmres", backend="lu", stability=False, rtol=1e-12, memory_budget=budget
+    )
+    assert ref.success and sol.success, sol.message
+    assert sol.info["strategy"] == "full"
+    # 25 if it held the same factors; fewer held give some room back to the basis
+    assert 25 <= sol.info["restart"] <= 30
+    assert sol.iterations > sol.info["restart"]  # it did restart
+    assert f"GMRES restarted every {sol.info['restart']} iterations (not 60)" in sol.message
+    assert _rel(sol.q, ref.q) < 1e-10
+    with pytest.raises(MemoryBudgetError, match=r"Krylov .* with restart 20"):
+        rl.solve(system, H, method="gmres", stability=False, memory_budget=shortest - 1)
+
+
 def _pencil(n: int = 400) -> Pencil:
     K0 = _stiffness(n)
     return Pencil(K0, K0 * 1e-5, sp.csr_array(sp.eye_array(n)), 300.0)

@@ -11,6 +11,7 @@ part ``dA`` is applied as a sparse convolution over harmonic indices, never asse
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Callable, Iterable
 from typing import Any
@@ -20,7 +21,7 @@ import scipy.sparse as sp
 
 from ..budget import format_bytes, solve_budget
 from ..linalg import BlockInverse, Pencil, SingularBlockError, default_workers, make_inverse
-from ..linalg.memory import SolveMemory
+from ..linalg.memory import MIN_RESTART, SolveMemory
 from ..linalg.memory import check as check_memory
 from ..linalg.store import FactorStore
 from ..system.periodic import PeriodicSystem
@@ -326,7 +327,11 @@ class HarmonicBalance:
     def inverse(self) -> BlockInverse:
         """``A0(n)^-1`` for every ``n >= 0`` (made on first use by :attr:`backend`)."""
         if self._inverse is None:
-            spare = self.budget - self.memory.vectors - self.memory.krylov
+            # the factors first, beside the shortest GMRES basis: a factor not held is made
+            # again at every iteration, a shorter restart costs iterations only where more
+            # are needed than it holds (the restart is fitted to what the factors leave)
+            shortest = dataclasses.replace(self.memory, restart=MIN_RESTART)
+            spare = self.budget - shortest.vectors - shortest.krylov
             self._inverse, self.backend_note = make_inverse(
                 self.pencil,
                 self.pos,

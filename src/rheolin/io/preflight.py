@@ -30,6 +30,7 @@ import numpy as np
 
 from ..budget import MemoryBudgetError, format_bytes, solve_budget
 from ..errors import ModelError
+from ..linalg.memory import MIN_RESTART, SolveMemory
 
 __all__ = ["VECTORS_PER_HARMONIC", "Preflight", "check_free_bodies", "preflight"]
 
@@ -115,10 +116,10 @@ def preflight(
             f"{where}: order {order}"
             + ("" if max_order is None else f" with max_order {max_order:g}")
             + f" grows the harmonic set past {max_size:,} harmonics, the most that fit the "
-            f"memory budget of {format_bytes(limit)} with {n} DOF (a solve holds up to "
-            f"{format_bytes(per_harmonic)} per harmonic: at least {VECTORS_PER_HARMONIC} "
-            "complex vectors, and a GMRES basis that grows with its iterations up to its "
-            "restart length); lower `order` or set `max_order` "
+            f"memory budget of {format_bytes(limit)} with {n} DOF (a solve holds at least "
+            f"{format_bytes(per_harmonic)} per harmonic: {VECTORS_PER_HARMONIC} complex "
+            f"vectors and a GMRES basis of its shortest restart, {MIN_RESTART}); lower "
+            "`order` or set `max_order` "
             "(or raise RHEOLIN_SOLVE_MEMORY)"
         ) from None
     except ValueError as exc:
@@ -129,16 +130,16 @@ def preflight(
 def _per_harmonic(system: Any) -> int:
     """Bytes a solve holds per harmonic of the two-sided set, before any factor: at least
     :data:`VECTORS_PER_HARMONIC` complex vectors, or the operator's own estimate of its
-    vectors and GMRES basis (:class:`~rheolin.linalg.memory.SolveMemory`, per harmonic
-    ``n >= 0``, two of which make about one of each sign)."""
-    from ..linalg.memory import SolveMemory
+    vectors and GMRES basis with the shortest restart it is given to fit a budget
+    (:class:`~rheolin.linalg.memory.SolveMemory`, per harmonic ``n >= 0``, two of which make
+    about one of each sign)."""
 
     touched = np.zeros(system.n, bool)  # the support of the time variation
     for name in ("M", "D", "K"):
         for k, X in getattr(system, name).items():
             if k:
                 touched[np.flatnonzero(np.abs(X).sum(axis=1))] = True
-    operator = SolveMemory(system.n, 2, int(touched.sum())).total // 2
+    operator = SolveMemory(system.n, 2, int(touched.sum()), restart=MIN_RESTART).total // 2
     return max(VECTORS_PER_HARMONIC * 16 * system.n, operator)
 
 

@@ -52,6 +52,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..budget import format_bytes
 from ..harmonics.balance import HarmonicBalance
 from ..linalg.memory import ROWS_SHARE
 from .gmres_core import Step, gmres_from
@@ -113,7 +114,9 @@ def _support_step(op: HarmonicBalance, opts: Options) -> Step:
         q0 = op.solve_A0(F)
         rhs = -op.apply_dA_support(q0[:, cols], rows, cols)
         Z0 = None if x0 is None else -op.apply_dA_support(x0[:, cols], rows, cols)
-        Z, info, history = gmres_from(reduced, rhs, Z0, op.norm, weights, opts, op.rhs_norm, 200)
+        Z, info, history = gmres_from(
+            reduced, rhs, Z0, op.norm, weights, opts, op.rhs_norm, op.memory.restart_length
+        )
         Y = F.copy()
         Y[:, rows] += Z
         return op.solve_A0(Y), info, history
@@ -137,7 +140,9 @@ def _rows_step(op: HarmonicBalance, opts: Options) -> Step:
     def step(F: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, list[float]]:
         rhs = -dA_rows(op.solve_A0(F))
         Z0 = None if x0 is None else -dA_rows(x0)
-        Z, info, history = gmres_from(reduced, rhs, Z0, op.norm, weights, opts, op.rhs_norm, 60)
+        Z, info, history = gmres_from(
+            reduced, rhs, Z0, op.norm, weights, opts, op.rhs_norm, op.memory.restart_length
+        )
         Y = F.copy()
         Y[:, rows] += Z
         return op.solve_A0(Y), info, history
@@ -164,7 +169,7 @@ def _full_step(op: HarmonicBalance, opts: Options) -> Step:
     def step(F: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, list[float]]:
         Y0 = None if x0 is None else op.apply_A0(x0)
         Y, info, history = gmres_from(
-            preconditioned, F, Y0, op.norm, weights, opts, op.rhs_norm, 60
+            preconditioned, F, Y0, op.norm, weights, opts, op.rhs_norm, op.memory.restart_length
         )
         return op.solve_A0(Y), info, history
 
@@ -174,7 +179,6 @@ def _full_step(op: HarmonicBalance, opts: Options) -> Step:
 def _band_step(op: HarmonicBalance, opts: Options) -> tuple[Step | None, str]:
     """GMRES right-preconditioned by ``P = A0 + dA_wide`` (see the module); ``None`` and the
     reason when ``P`` does not fit the memory budget or cannot be factorized."""
-    from ..budget import format_bytes
     from ..linalg.direct import analyze, resolve_backend
 
     ks = op.wide_harmonics(MAX_SUPPORT)
@@ -206,7 +210,7 @@ def _band_step(op: HarmonicBalance, opts: Options) -> tuple[Step | None, str]:
     def step(F: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, list[float]]:
         Y0 = None if x0 is None else op.half((P @ op.expand(x0).ravel()).reshape(nh, nd))
         Y, info, history = gmres_from(
-            preconditioned, F, Y0, op.norm, weights, opts, op.rhs_norm, 60
+            preconditioned, F, Y0, op.norm, weights, opts, op.rhs_norm, op.memory.restart_length
         )
         return inverse(Y), info, history
 
@@ -347,7 +351,7 @@ def _pairs_step(op: HarmonicBalance, opts: Options) -> tuple[Step | None, str]:
     def step(F: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, list[float]]:
         Y0 = None if x0 is None else op.apply(x0)
         Y, info, history = gmres_from(
-            preconditioned, F, Y0, op.norm, weights, opts, op.rhs_norm, 60
+            preconditioned, F, Y0, op.norm, weights, opts, op.rhs_norm, op.memory.restart_length
         )
         return inverse(Y), info, history
 
@@ -438,8 +442,15 @@ def solve_gmres(op: HarmonicBalance, opts: Options) -> SolverOutcome:
         "backend": op.inverse.name if uses_a0 else "lu (whirl-pair chains)",
         "refinements": refinements,
         "warm_start": opts.x0 is not None,
+        "restart": op.memory.restart_length,
     }
     note = tried + note
+    if strategy != "pairs" and op.memory.restart_length < op.memory.default_restart:
+        note += (
+            f"{'; ' if note else ''}GMRES restarted every {op.memory.restart_length} "
+            f"iterations (not {op.memory.default_restart}) to fit the memory budget of "
+            f"{format_bytes(op.budget)}"
+        )
     tail = f"; {note}" if note else ""
     if info == 0:
         msg = f"converged in {its} iterations ({strategy} strategy){tail}"
