@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -223,6 +224,29 @@ def test_hidden_high_frequency_instability_is_never_called_stable() -> None:
     assert _monodromy_max_real(s, rtol=1e-8) > 0
     res = rl.floquet(s, band=10)
     assert not (res.decided and res.stable)
+
+
+def test_the_reported_seconds_include_the_band(monkeypatch) -> None:
+    """``info["seconds"]`` (the run's ``floquet_seconds``) is the whole verdict: the band's
+    modes and its scan too, which at 19,998 DOF are half of it (it reported 124 s of about
+    270). The band is made to take 0.5 s longer than it does."""
+    from rheolin.floquet import large
+
+    real = large.certified_band
+
+    def slow(*args, **kwargs):  # type: ignore[no-untyped-def]
+        start = time.perf_counter()
+        out = real(*args, **kwargs)
+        while time.perf_counter() - start < 0.5:
+            time.sleep(0.05)
+        return out
+
+    s = mesh_chain(30)
+    fast = rl.floquet(s, band=10)
+    monkeypatch.setattr(large, "certified_band", slow)
+    res = rl.floquet(s, band=10)
+    assert res.info["seconds"] >= 0.5
+    assert res.info["seconds"] >= fast.info["seconds"]
 
 
 @pytest.mark.parametrize(
