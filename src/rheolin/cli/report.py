@@ -68,7 +68,12 @@ def print_summary(console: Console, s: dict[str, Any], seconds: float) -> None:
     console.print(
         f"method {escape(str(s['method']))} (asked: {escape(str(s['requested_method']))}), "
         f"{s['iterations']} iterations, {residual}: {ok}; {s['harmonic_count']} harmonics x "
-        f"{s['n_dof']} DOF, solved in {seconds:.2f} s"
+        f"{s['n_dof']} DOF, "
+        + (
+            f"{seconds:.2f} s with the stability check"
+            if s.get("stability") not in (None, "not checked")
+            else f"solved in {seconds:.2f} s"
+        )
     )
     stab = s["stability"]
     colour = {"stable": "green", "unstable": "red"}.get(stab, "yellow")
