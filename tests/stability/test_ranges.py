@@ -85,6 +85,15 @@ def test_floquet_rtol_meets_the_monodromy_matrix(model, reference) -> None:
     assert res.decided and not res.stable
     assert res.max_real == pytest.approx(p["max_real"], rel=1e-6, abs=p["error"])
     assert res.max_real_uncertainty <= 1e-6 * abs(res.max_real)
+    # the memory it reports covers the finer lattices the refinement searched
+    from rheolin.floquet.confirm import lattice_order
+    from rheolin.floquet.footprint import lattice_memory
+
+    orders = res.info["accuracy"]["orders"]
+    assert orders
+    finest = lattice_order(res.lattice, max(orders))
+    system = model.assemble(4480.0 / RPM).system
+    assert res.info["memory_estimate"] >= lattice_memory(system, finest)
 
 
 def test_default_accuracy_next_to_a_range(model, reference) -> None:

@@ -87,7 +87,7 @@ def refine_leading(
     each step starts from the previous speed's search on the same lattice, and is kept for
     the next.
     """
-    info: dict[str, Any] = {"rtol": float(rtol), "orders": [], "met": False}
+    info: dict[str, Any] = {"rtol": float(rtol), "orders": [], "met": False, "memory": 0}
     if not np.isfinite(rtol):
         info["met"] = True
         return out, info
@@ -115,6 +115,7 @@ def refine_leading(
         out, fine = confirm_unresolved(system, out, finer, previous, todo=todo)
         _restore(out, steps)
         info["orders"].append(order)
+        info["memory"] = max(info["memory"], lattice_memory(system, finer))
         if continuation is not None and fine is not None:
             continuation.keep(n, finer, fine)
         j = int(np.argmax(out.exponents.real))

@@ -240,6 +240,8 @@ def floquet_on_lattice(
             res.info["refined_near"] = opened
         if rtol is not None and near is None and (last or res.decided):
             out, accuracy = refine_leading(system, out, lattice, rtol, room, continuation)
+            if accuracy["memory"]:  # its finer lattices, beside what this one holds
+                used = max(used, held + int(accuracy["memory"]))
             res = search_result(system, out, lattice, near, used, t0, modes)
             res.info["accuracy"] = accuracy
     return res
