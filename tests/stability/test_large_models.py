@@ -322,38 +322,11 @@ def test_cli_refuses_a_model_too_large_for_the_band_method(tmp_path: Path) -> No
     assert not (tmp_path / "o" / "results.nc").exists()
 
 
-def test_a_certified_band_keeps_only_its_vectors() -> None:
-    """What the lattice search's budget counts of the band (``band_vectors``) is what a
-    certified band keeps: its factor of ``K_0``, Arnoldi bases and scan blocks are freed when
-    it is made (traced by tracemalloc: NumPy's arrays), the stage's own peak well above."""
-    import gc
-    import tracemalloc
-
-    from rheolin.floquet import large
-    from rheolin.floquet.band import band_vectors
-
-    system = _assembled(refined_example("rotor", 335), 3000.0).system
-    large.band_estimate(system, 1)  # the system's own caches (its coefficient blocks) first
-    gc.collect()
-    tracemalloc.start()
-    try:
-        before = tracemalloc.get_traced_memory()[0]
-        band = large.certified_band(system, None, None, 1)
-        gc.collect()
-        kept, peak = tracemalloc.get_traced_memory()
-    finally:
-        tracemalloc.stop()
-    vectors = band_vectors(system, int(band.lam.size))
-    assert kept - before <= 1.1 * vectors + 2**20
-    assert peak - before > 2 * vectors  # the stage needed more than it kept
-
-
 def test_a_finer_order_past_the_budget_is_a_note_not_an_error(monkeypatch) -> None:
     """Raising the lattice order of an undecided band verdict checks the finer lattice with
     the band's memory, as the search itself does: past the budget the verdict stays
     undecided with a note naming the estimate (the 100,026-DOF gearbox with a 20 GB budget
-    raised MemoryBudgetError, 24.8 GB for order 2 with its band, from ``rl.floquet``); the
-    band's vectors are made too large to fit."""
+    raised MemoryBudgetError, 24.8 GB for order 2 with its band, from ``rl.floquet``)."""
     from rheolin.floquet import lattice_run
 
     calls: list[int] = []
@@ -372,7 +345,7 @@ def test_a_finer_order_past_the_budget_is_a_note_not_an_error(monkeypatch) -> No
 
     monkeypatch.setattr(lattice_run, "floquet_on_lattice", search)
     monkeypatch.setattr(lattice_run.large, "band_failed", lambda modes: False)
-    monkeypatch.setattr(lattice_run, "band_vectors", lambda system, modes: 10**15)
+    monkeypatch.setattr(lattice_run, "band_memory", lambda system, modes: 10**15)
     system = _assembled(refined_example("rotor", 335), 3000.0).system
     res = lattice_run.lattice_auto(system, None, None, refine=True)
     assert calls == [1]

@@ -20,7 +20,7 @@ from ..budget import memory_budget as resolve_budget
 from ..harmonics.lattice import system_lattice
 from ..system.frames import BodyFrame, rotate, transformation
 from ..system.periodic import PeriodicSystem
-from .band import BAND_ABOVE, BAND_MODES, BandAveraged, band_memory, band_modes, band_vectors
+from .band import BAND_ABOVE, BAND_MODES, BandAveraged, band_memory, band_modes
 from .complement import touched_dofs
 from .footprint import lattice_memory
 
@@ -88,15 +88,10 @@ def inertial_shifts(system: PeriodicSystem, modes: Any) -> np.ndarray:
 
 
 def band_estimate(system: PeriodicSystem, order: int, modes: int | None = None) -> int:
-    """Estimated peak memory [bytes] of the band method at lattice ``order``: the larger of
-    the band's (:func:`~rheolin.floquet.band.band_memory`) and the lattice search's on the
-    full operator beside the band's vectors, which are all it keeps of its stage (measured at
-    19,998 DOF: 0.32 GB held after a band stage whose peak was 1.09 GB above the system's;
-    ``band_vectors`` 0.31 GB, ``band_memory`` 1.34 GB)."""
+    """Estimated peak memory [bytes] of the band method at lattice ``order``: the band
+    (:func:`~rheolin.floquet.band.band_memory`) and the lattice search on the full operator."""
     lattice = system_lattice(system, order, max_size=10**6)
-    m = modes or BAND_MODES
-    search = lattice_memory(system, lattice) + band_vectors(system, m)
-    return max(band_memory(system, m), search)
+    return band_memory(system, modes or BAND_MODES) + lattice_memory(system, lattice)
 
 
 def band_failed(modes: Any) -> bool:

@@ -17,7 +17,7 @@ from ..linalg.threads import single_thread_blas
 from ..system.periodic import PeriodicSystem
 from . import large
 from .accuracy import leading_uncertainty, refine_leading, refine_open
-from .band import BandAveraged, band_vectors
+from .band import BandAveraged, band_memory, band_vectors
 from .confirm import confirm_unresolved, grown_lattice, open_rows, snapshot, standard_lattices
 from .continuation import Continuation
 from .footprint import lattice_memory
@@ -133,13 +133,11 @@ def _lattice_auto(
 
 
 def search_memory(system: PeriodicSystem, lattice: Lattice, modes: Any = None) -> int:
-    """Estimated peak memory [bytes] of the search on ``lattice``, with what the band of
-    ``modes`` holds while it runs when it is one (its vectors,
-    :func:`~rheolin.floquet.band.band_vectors`: the band's factor, Arnoldi bases and scan
-    are freed before the search starts)."""
+    """Estimated peak memory [bytes] of the search on ``lattice``, with the band of
+    ``modes`` when it is one (:func:`~rheolin.floquet.band.band_memory`)."""
     est = lattice_memory(system, lattice)
     if isinstance(modes, BandAveraged):
-        est += band_vectors(system, int(modes.lam.size))
+        est += band_memory(system, int(modes.lam.size))
     return est
 
 
