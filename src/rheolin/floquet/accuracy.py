@@ -107,7 +107,8 @@ def refine_leading(
         todo = _cluster_rows(out, i, system.omega)
         order = max(order, int(out.order[i])) + 1
         finer = lattice_order(lattice, order)
-        if finer is None or lattice_memory(system, finer) > limit:
+        need = lattice_memory(system, finer) if finer is not None else 0
+        if finer is None or need > limit:
             break
         previous = continuation.start(n, finer) if continuation is not None else None
         before = snapshot(out)
@@ -115,7 +116,7 @@ def refine_leading(
         out, fine = confirm_unresolved(system, out, finer, previous, todo=todo)
         _restore(out, steps)
         info["orders"].append(order)
-        info["memory"] = max(info["memory"], lattice_memory(system, finer))
+        info["memory"] = max(info["memory"], need)
         if continuation is not None and fine is not None:
             continuation.keep(n, finer, fine)
         j = int(np.argmax(out.exponents.real))
