@@ -335,6 +335,76 @@ def test_memory_budget_refuses_or_coarsens_before_allocating(monkeypatch) -> Non
         rl.solve(loaded, rl.HarmonicSet.closure(loaded, order=2), stability=True)
 
 
+def _gearbox_at(rpm: float) -> rl.PeriodicSystem:
+    from rheolin.data import example_path
+    from rheolin.io import load_model
+
+    return load_model(example_path("gearbox")).assemble(rpm * np.pi / 30).system
+
+
+def test_lattice_search_refused_or_stopped_by_its_room(monkeypatch) -> None:
+    """A search with a memory ``room`` is refused before its first factor when the estimate
+    for the clusters it has to search exceeds it, and stopped as soon as the eigenvectors
+    it has found do (on a 100,026-DOF gearbox the candidates of an order-2 search outgrew
+    an estimate that counted the Arnoldi basis only, and the OS killed the process)."""
+    import importlib
+
+    search = importlib.import_module("rheolin.floquet.search")
+    footprint = importlib.import_module("rheolin.floquet.footprint")
+    from rheolin.floquet.resonance import averaged_modes, floquet_lattice
+
+    system = _gearbox_at(3000)
+    lattice = floquet_lattice(system, 1)
+    avg = averaged_modes(system)
+    free = search.LatticeSearch(system, lattice, modes=avg)
+    planned = len(free.clusters) - len(free.skipped)
+    need = footprint.lattice_memory(system, lattice, clusters=planned)
+    assert need > footprint.lattice_memory(system, lattice, clusters=0)
+    with pytest.raises(MemoryBudgetError, match=f"for the {planned} clusters it searches"):
+        search.LatticeSearch(system, lattice, modes=avg, room=need - 1)
+    search.LatticeSearch(system, lattice, modes=avg, room=need)  # fits: no refusal
+    # the running check: with the candidates left out of the estimate, a room a few
+    # vectors above the operator's estimate stops the search after its first clusters
+    monkeypatch.setattr(footprint, "CANDIDATES_PER_CLUSTER", 0)
+    monkeypatch.setattr(footprint, "CHOOSING_PER_CLUSTER", 0)
+    vector = 2 * system.n * len(lattice) * 16
+    base = footprint.lattice_memory(system, lattice, clusters=0)
+    stopped = search.LatticeSearch(system, lattice, modes=avg, room=base + 3 * vector)
+    with pytest.raises(MemoryBudgetError, match=r"of eigenvectors after [1-9] clusters"):
+        stopped.run()
+    assert 0 < len(stopped.shifts) < planned
+    free.run()
+    assert free.pool == []  # released once the representatives are chosen
+
+
+def test_finer_searches_stopped_by_memory_leave_the_verdict_undecided(monkeypatch) -> None:
+    """A finer lattice's search that outgrows its room while confirming (the gearbox's
+    unresolved clusters) or raising the order (the chain inside its combination resonance)
+    leaves the coarse verdict undecided, with the reason: no exception, no verdict."""
+    import importlib
+
+    search = importlib.import_module("rheolin.floquet.search")
+    check = search.LatticeSearch.check_room
+
+    def refuse_finer(self, planned=None, done=0):  # the coarse search fits, no finer one
+        if self.lattice.order > 1 and planned is None:
+            raise MemoryBudgetError("the finer search holds more than its room")
+        check(self, planned, done)
+
+    system = _gearbox_at(3000)
+    assert rl.floquet(system).decided  # confirmed on the lattice grown along the leaks
+    monkeypatch.setattr(search.LatticeSearch, "check_room", refuse_finer)
+    res = rl.floquet(system)
+    assert not res.decided
+    assert "confirmation on a finer lattice was stopped" in res.info["note"]
+    assert "order 2 was stopped" in res.info["note"]  # and the next order too
+    w1 = 2 * _w_gear() / 8.03
+    chain_system = chain(w1, 0.3, 0.3)  # order 1 undecided, order 2 decides (above)
+    res = rl.floquet(chain_system, method="lattice")
+    assert res.lattice.order == 1 and not res.decided
+    assert "order 2 was stopped" in res.info["note"]
+
+
 def test_hill_pencil_is_linear_in_the_harmonic_count() -> None:
     """200,001 harmonics of a one-DOF system: a |H| x |H| comparison would need 40 GB."""
     s = mathieu(1.0, 0.3, 0.05, w=1.0)

@@ -15,10 +15,11 @@ from typing import Any
 
 import numpy as np
 
+from ..budget import MemoryBudgetError
 from ..budget import memory_budget as resolve_budget
 from ..harmonics.lattice import Lattice
 from ..system.periodic import PeriodicSystem
-from .confirm import confirm_unresolved, lattice_order, snapshot
+from .confirm import confirm_unresolved, lattice_order, open_centres, snapshot
 from .footprint import lattice_memory
 from .outcome import LatticeExponents
 from .result import SAFETY
@@ -107,13 +108,18 @@ def refine_leading(
         todo = _cluster_rows(out, i, system.omega)
         order = max(order, int(out.order[i])) + 1
         finer = lattice_order(lattice, order)
-        need = lattice_memory(system, finer) if finer is not None else 0
+        clusters = int(open_centres(out, system.omega, todo).size)
+        need = lattice_memory(system, finer, clusters=clusters) if finer is not None else 0
         if finer is None or need > limit:
             break
         previous = continuation.start(n, finer) if continuation is not None else None
         before = snapshot(out)
         steps = out.info.get("confirmed")  # the verdict's confirmations, kept in its info
-        out, fine = confirm_unresolved(system, out, finer, previous, todo=todo)
+        try:
+            out, fine = confirm_unresolved(system, out, finer, previous, todo=todo, room=limit)
+        except MemoryBudgetError as exc:  # more eigenvectors than estimated: out stands
+            info["refused"] = str(exc)
+            break
         _restore(out, steps)
         info["orders"].append(order)
         info["memory"] = max(info["memory"], need)
@@ -171,13 +177,17 @@ def refine_open(
         finer = lattice_order(lattice, order) if finest is None or order <= finest else None
         if finer is None:
             break
-        estimate = lattice_memory(system, finer)
+        estimate = lattice_memory(system, finer, clusters=int(open_centres(out, w, todo).size))
         if estimate > limit:
             break
         used = max(used, estimate)
         previous = continuation.start(n, finer) if continuation is not None else None
         steps = out.info.get("confirmed")
-        out, fine = confirm_unresolved(system, out, finer, previous, todo=todo)
+        try:
+            out, fine = confirm_unresolved(system, out, finer, previous, todo=todo, room=limit)
+        except MemoryBudgetError as exc:  # more eigenvectors than estimated: out stands
+            out.info["memory_refused"] = str(exc)
+            break
         _restore(out, steps)
         orders.append(order)
         if fine is not None:

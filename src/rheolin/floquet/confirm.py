@@ -6,6 +6,7 @@ import copy
 
 import numpy as np
 
+from ..budget import MemoryBudgetError
 from ..harmonics.lattice import Lattice, harmonic_lattice
 from ..system.periodic import PeriodicSystem
 from .checks import agree, certify, split_gaps
@@ -21,6 +22,7 @@ __all__ = [
     "confirm_unresolved",
     "grown_lattice",
     "lattice_order",
+    "open_centres",
     "open_rows",
     "short_rows",
     "snapshot",
@@ -49,6 +51,7 @@ def confirm_unresolved(
     previous: LatticeExponents | None = None,
     todo: np.ndarray | None = None,
     start: LatticeExponents | None = None,
+    room: int | None = None,
 ) -> tuple[LatticeExponents, LatticeExponents | None]:
     """Settle the unresolved, uncertified representatives and the clusters short of their
     exponents (:func:`open_rows`; or the rows ``todo``) on a finer lattice.
@@ -74,6 +77,10 @@ def confirm_unresolved(
     confirmation made again from the coarse search after another finer lattice, whose
     eigenvectors ``out`` no longer holds).
 
+    ``room``: the memory [bytes] the finer search may use (:func:`~rheolin.floquet.search.
+    lattice_exponents`; its refusal, a :class:`~rheolin.budget.MemoryBudgetError`, leaves
+    ``out`` as it was).
+
     ``todo``: a mask of rows to search again instead (:func:`~rheolin.floquet.accuracy.
     refine_leading`: the leading exponent's cluster, resolved, for its accuracy).
 
@@ -85,13 +92,17 @@ def confirm_unresolved(
     which the next speed starts from).
     """
     if previous is None or todo is not None:
-        return _confirm(system, out, finer, previous, todo, start)
+        return _confirm(system, out, finer, previous, todo, start, room)
     before = snapshot(out)
-    got, fine = _confirm(system, out, finer, previous, None, start)
+    got, fine = _confirm(system, out, finer, previous, None, start, room)
     left = _open(got)
     if left == (0, 0):
         return got, fine
-    again, fine_again = _confirm(system, before, finer, None, None, start)
+    try:
+        again, fine_again = _confirm(system, before, finer, None, None, start, room)
+    except MemoryBudgetError:  # the retry does not fit: the continued outcome stands
+        got.info["confirmed"]["retried"] = False
+        return got, fine
     if _open(again) == (0, 0):
         again.info["confirmed"]["retried"] = True
         return again, fine_again
@@ -208,6 +219,24 @@ def short_rows(out: LatticeExponents, w: float) -> np.ndarray:
     return mask
 
 
+def open_centres(out: LatticeExponents, w: float, todo: np.ndarray | None = None) -> np.ndarray:
+    """The centres of the clusters a confirmation searches: those of the rows ``todo``
+    (default :func:`open_rows`) in the upper half plane, with the clusters they may also
+    stand for."""
+    if todo is None:
+        todo = open_rows(out, w)
+    # upper half plane, real centres included (their imaginary parts are rounding, of
+    # either sign)
+    upper = out.centre.imag >= -1e-9 * np.maximum(np.abs(out.centre), w)
+    # with the clusters they may also stand for (their energy on those modes): two close
+    # clusters share their quota in the search, or the stable exponent nearest both satisfies
+    # the one searched alone and a parametric exponent between them is lost (the example
+    # rotor inside its band at order 1 -> 2 was once decided stable so)
+    linked = [z for i in np.flatnonzero(todo) for z in out.related[i]]
+    centres = np.unique(np.concatenate([out.centre[todo & upper], np.asarray(linked, complex)]))
+    return centres[np.isfinite(centres)]
+
+
 def open_rows(out: LatticeExponents, w: float) -> np.ndarray:
     """The rows a finer lattice is to settle: unresolved and uncertified, or of a cluster
     short of its exponents (:func:`short_rows`)."""
@@ -250,8 +279,10 @@ def _confirm(
     previous: LatticeExponents | None,
     todo: np.ndarray | None,
     start: LatticeExponents | None = None,
+    room: int | None = None,
 ) -> tuple[LatticeExponents, LatticeExponents | None]:
-    """:func:`confirm_unresolved` from one start."""
+    """:func:`confirm_unresolved` from one start (``out`` unchanged when the finer search
+    is refused by its ``room``)."""
     coarse = out if start is None else start
     w = system.omega
     if todo is None:
@@ -259,16 +290,7 @@ def _confirm(
     if not todo.any():
         out.info["confirmed"] = {"order": finer.order, "clusters": 0, "replaced": 0, "confirmed": 0}
         return out, None
-    # upper half plane, real centres included (their imaginary parts are rounding, of
-    # either sign)
-    upper = out.centre.imag >= -1e-9 * np.maximum(np.abs(out.centre), system.omega)
-    # with the clusters they may also stand for (their energy on those modes): two close
-    # clusters share their quota in the search, or the stable exponent nearest both satisfies
-    # the one searched alone and a parametric exponent between them is lost (the example
-    # rotor inside its band at order 1 -> 2 was once decided stable so)
-    linked = [z for i in np.flatnonzero(todo) for z in out.related[i]]
-    centres = np.unique(np.concatenate([out.centre[todo & upper], np.asarray(linked, complex)]))
-    centres = centres[np.isfinite(centres)]
+    centres = open_centres(out, w, todo)
     if centres.size == 0:
         out.info["confirmed"] = {"order": finer.order, "clusters": 0, "replaced": 0, "confirmed": 0}
         return out, None
@@ -280,6 +302,7 @@ def _confirm(
         same_system=previous is None,
         coarse=None if previous is None else coarse,
         defer_truncation=True,
+        room=room,
     )
     fields = (
         "exponents", "bounds", "truncation", "edge", "centroid", "dominant", "certified",

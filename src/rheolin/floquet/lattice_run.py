@@ -18,7 +18,14 @@ from ..system.periodic import PeriodicSystem
 from . import large
 from .accuracy import leading_uncertainty, refine_leading, refine_open
 from .band import BandAveraged, band_memory, band_vectors
-from .confirm import confirm_unresolved, grown_lattice, open_rows, snapshot, standard_lattices
+from .confirm import (
+    confirm_unresolved,
+    grown_lattice,
+    open_centres,
+    open_rows,
+    snapshot,
+    standard_lattices,
+)
 from .continuation import Continuation
 from .footprint import lattice_memory
 from .resonance import floquet_lattice
@@ -121,12 +128,18 @@ def _lattice_auto(
             )
             break
         log.info("floquet: order %d undecided; refining to order %d", p, p + 1)
+        try:
+            finer_res = floquet_on_lattice(
+                system, finer, budget=budget, continuation=continuation, modes=modes,
+                rtol=rtol, last=p + 1 >= top,
+            )  # fmt: skip
+        except MemoryBudgetError as exc:  # found more eigenvectors than estimated
+            why = f"undecided at lattice order {p}; order {p + 1} was stopped: {exc}"
+            res.info["note"] = f"{res.info['note']}; {why}" if res.info.get("note") else why
+            break
         tried.append(p)
         p += 1
-        res = floquet_on_lattice(
-            system, finer, budget=budget, continuation=continuation, modes=modes, rtol=rtol,
-            last=p >= top,
-        )  # fmt: skip
+        res = finer_res
         res.info["refined_from"] = list(tried)
     res.info["seconds"] = time.perf_counter() - t0
     return res
@@ -157,19 +170,13 @@ def floquet_on_lattice(
     finer order follows)."""
     t0 = time.perf_counter()
     est = search_memory(system, lattice, modes)
-    # what stays alive while finer lattices are searched near open clusters: this lattice's
-    # operators and vectors and the band's modes; the finer searches get the budget's rest
-    held = lattice_memory(system, lattice, searching=False)
-    if isinstance(modes, BandAveraged):
-        held += band_vectors(system, int(modes.lam.size))
+    band_held = band_vectors(system, int(modes.lam.size)) if isinstance(modes, BandAveraged) else 0
     limit = resolve_budget(budget)
     kept = 0
     if continuation is not None:  # the previous speed's searches stay until replaced
         if est + continuation.nbytes > limit:
             continuation.clear()  # no room for them: this speed starts cold
         kept = continuation.nbytes
-    held += kept
-    room = max(limit - held, 1)
     check_budget(
         est,
         limit,
@@ -189,7 +196,14 @@ def floquet_on_lattice(
             same_system=False,
             defer_truncation=True,
             modes=modes,
+            room=max(limit - kept - band_held, 1),  # checked again once its clusters are known
         )
+        # what stays alive while finer lattices are searched near open clusters: this
+        # lattice's operators, the vectors its result holds, the band's modes and the
+        # previous speed's searches; the finer searches get the budget's rest
+        held = lattice_memory(system, lattice, searching=False, clusters=0)
+        held += out.nbytes + band_held + kept
+        room = max(limit - held, 1)
         if continuation is not None and near is None:
             continuation.keep(system.n, lattice, out)
         # unresolved exponents and clusters short of theirs: search those clusters again on
@@ -218,6 +232,8 @@ def floquet_on_lattice(
             else:
                 out = chain.run(out, standard)
             steps, used = chain.steps, max(used, chain.used)
+            if chain.refused:
+                out.info["memory_refused"] = chain.refused
         if steps:
             out.info["confirmed"] = steps
         if out.settle is not None:
@@ -242,6 +258,10 @@ def floquet_on_lattice(
                 used = max(used, held + int(accuracy["memory"]))
             res = search_result(system, out, lattice, near, used, t0, modes)
             res.info["accuracy"] = accuracy
+    refused = res.info.pop("memory_refused", None)
+    if refused and not res.decided:
+        why = f"a confirmation on a finer lattice was stopped: {refused}"
+        res.info["note"] = f"{res.info['note']}; {why}" if res.info.get("note") else why
     return res
 
 
@@ -256,6 +276,7 @@ class Chain:
         self.system, self.held, self.room, self.continuation = system, held, room, continuation
         self.steps: list[dict[str, Any]] = []
         self.used = 0
+        self.refused = ""  # why a finer search was stopped by the memory budget
 
     def run(
         self, out: Any, lattices: list[Lattice], start: Any = None, *, grown: bool = False
@@ -267,12 +288,19 @@ class Chain:
         for finer in lattices:
             if not np.any(open_rows(out, system.omega)):
                 break
-            est_finer = lattice_memory(system, finer)
+            clusters = int(open_centres(out, system.omega).size)
+            est_finer = lattice_memory(system, finer, clusters=clusters)
             if est_finer > self.room:
                 break
             self.used = max(self.used, self.held + est_finer)
             previous = continuation.start(system.n, finer) if continuation is not None else None
-            out, fine = confirm_unresolved(system, out, finer, previous, start=start)
+            try:
+                out, fine = confirm_unresolved(
+                    system, out, finer, previous, start=start, room=self.room
+                )
+            except MemoryBudgetError as exc:  # more eigenvectors than estimated: out stands
+                self.refused = str(exc)
+                break
             start = None
             if continuation is not None and fine is not None:
                 continuation.keep(system.n, finer, fine)

@@ -52,6 +52,15 @@ class LatticeExponents:
     rate: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=complex))
 
     @property
+    def nbytes(self) -> int:
+        """Memory of the eigenvectors it holds [bytes]: its representatives' and those its
+        truncation estimates wait with (``settle``)."""
+        held = sum(int(v.nbytes) for v in self.vectors if v is not None)
+        for _, q, u in getattr(self.settle, "requests", {}).values():
+            held += int(q.nbytes) + int(u.nbytes)
+        return held
+
+    @property
     def complete(self) -> bool:
         """True when as many exponents were found as the averaged system has."""
         return bool(self.exponents.size >= self.expected)

@@ -27,6 +27,10 @@ __all__ = ["UNRESOLVED_EDGE"]
 UNRESOLVED_EDGE = 0.1
 
 
+#: What a representative's Ritz vector is replaced by once its polished vector is made.
+_SPENT = np.zeros(0, dtype=complex)
+
+
 def lattice_result(
     pencil: BalancedPencil,
     system: PeriodicSystem,
@@ -102,6 +106,7 @@ def lattice_result(
         else:
             tau = outer.estimate(lam_c, xq, u)
         part = _partner(c, H, n, avg.WB, conj_index)
+        c.y = _SPENT  # the result keeps the polished vector ``xb``; this one is not used again
         for lam_i in [c.lam, np.conj(c.lam)] if conj_too else [c.lam]:
             lams.append(complex(lam_i))
             vectors.append(xb if lam_i == c.lam else None)

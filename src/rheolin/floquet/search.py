@@ -80,6 +80,7 @@ def lattice_exponents(
     coarse: LatticeExponents | None = None,
     defer_truncation: bool = False,
     modes: Averaged | None = None,
+    room: int | None = None,
 ) -> LatticeExponents:
     """Representatives of the Floquet exponents of ``system`` on ``lattice``.
 
@@ -98,6 +99,10 @@ def lattice_exponents(
     (a confirmation keeps only some of the finer lattice's exponents; NaN until settled).
     ``modes``: the time-averaged modes to start from (a band of a large model,
     :func:`~rheolin.floquet.band.band_modes`); default all of them, or ``start``'s.
+    ``room``: the memory [bytes] the search may use (None: not checked); it is refused
+    (:class:`~rheolin.budget.MemoryBudgetError`) before its first factor when its estimate
+    for the clusters it has to search exceeds it, and as soon as the eigenvectors it has
+    found do (:class:`LatticeSearch`).
     """
     search = LatticeSearch(
         system,
@@ -108,6 +113,7 @@ def lattice_exponents(
         coarse=coarse,
         defer_truncation=defer_truncation,
         modes=modes,
+        room=room,
     )
     return search.run()
 
@@ -136,6 +142,13 @@ class LatticeSearch:
     the Gershgorin ``discs`` and the clusters ``skipped`` by them, the candidates ``pool``,
     the clusters ``done`` (quota met), ``tracked``, ``warm_starts``, the ``shifts`` and
     ``short`` searches, and the timers.
+
+    Memory: with a ``room`` [bytes], the search is refused before its first factor when the
+    estimate of :func:`~rheolin.floquet.footprint.lattice_memory` for the clusters it has to
+    search (known once the Gershgorin discs have certified the others) exceeds it, and
+    stopped as soon as its operator's estimate and the eigenvectors found so far do (a
+    search whose clusters find many more candidates than usual): a
+    :class:`~rheolin.budget.MemoryBudgetError`, never the operating system's kill.
     """
 
     def __init__(
@@ -149,8 +162,11 @@ class LatticeSearch:
         coarse: LatticeExponents | None = None,
         defer_truncation: bool = False,
         modes: Averaged | None = None,
+        room: int | None = None,
     ) -> None:
         self.t0 = time.perf_counter()
+        self.room = room
+        self._base: int | None = None  # the operator's estimate (without the vectors found)
         self.system, self.lattice = system, lattice
         self.n, self.w = system.n, system.omega
         self.H = lattice.indices
@@ -210,6 +226,40 @@ class LatticeSearch:
                 if np.all(reach < -1e-6 * np.maximum(np.abs(lam0[cl]), self.w)):
                     self.skipped.append(cid)
                     self.quotas[cid] = 0
+        self.check_room(planned=len(self.clusters) - len(self.skipped))
+
+    # ------------------------------------------------------------------ memory
+    def check_room(self, planned: int | None = None, done: int = 0) -> None:
+        """Refuse the search (:class:`~rheolin.budget.MemoryBudgetError`) when it does not
+        fit its ``room``: the estimate for ``planned`` clusters before it starts, else the
+        operator's estimate and the eigenvectors held after ``done`` clusters."""
+        if self.room is None:
+            return
+        from ..budget import MemoryBudgetError, format_bytes
+        from .footprint import lattice_memory
+
+        what = (
+            f"the lattice search (order {self.lattice.order}, {self.nh} harmonics, size "
+            f"{self.size})"
+        )
+        if planned is not None:
+            need = lattice_memory(self.system, self.lattice, clusters=planned)
+            told = f"needs an estimated {format_bytes(need)} for the {planned} clusters it searches"
+        else:
+            if self._base is None:  # the operator, its factor and the Arnoldi basis
+                self._base = lattice_memory(self.system, self.lattice, clusters=0)
+            held = sum(int(c.y.nbytes) for c in self.pool)
+            need = self._base + held
+            told = (
+                f"holds {format_bytes(held)} of eigenvectors after {done} clusters, "
+                f"{format_bytes(need)} with its operator's estimate"
+            )
+        if need > self.room:
+            raise MemoryBudgetError(
+                f"{what} {told}, more than the {format_bytes(self.room)} the memory budget "
+                "leaves it; lower the lattice order or condense the model, or raise the "
+                "budget (RHEOLIN_MEMORY_BUDGET or `memory_budget`)"
+            )
 
     # ------------------------------------------------------------------ candidates
     def candidate(self, yb: np.ndarray, lam: complex, shift: int) -> Candidate:
@@ -316,6 +366,8 @@ class LatticeSearch:
         self.arnoldi_seconds += time.perf_counter() - t2
         for c in run.found:
             c.search = cid
+            # a column of the checkpoint's Ritz vectors: copied, or it keeps all of them
+            c.y = np.ascontiguousarray(c.y)
         if run.satisfied:
             self.done[cid] = run.need
         else:
@@ -435,6 +487,7 @@ class LatticeSearch:
             self.skipped.remove(cid)
             self.quotas[cid] = self.quota(cid)
             self.pool.extend(self.find(cid))
+            self.check_room(done=len(self.shifts) + len(self.tracked))
 
     def info(self) -> dict[str, Any]:
         """What the search did (``seconds`` so far)."""
@@ -472,9 +525,11 @@ class LatticeSearch:
         for cid in range(len(self.clusters)):
             if cid not in self.skipped:
                 self.pool.extend(self.find(cid))
+                self.check_room(done=len(self.shifts) + len(self.tracked))
         self.search_certified()
         expected = int(sum(self.quotas.values()))
         reps = select(self.pool, self.quotas, self.w, self.nh, share=self.share)
+        self.pool = []  # the representatives keep theirs; the other candidates' vectors go
         out = lattice_result(
             self.pencil,
             self.system,
