@@ -350,3 +350,32 @@ def test_a_finer_order_past_the_budget_is_a_note_not_an_error(monkeypatch) -> No
     res = lattice_run.lattice_auto(system, None, None, refine=True)
     assert calls == [1]
     assert "order 2" in res.info["note"] and "memory budget" in res.info["note"]
+
+
+def test_band_lattice_past_the_budget_is_refused_before_the_scan(monkeypatch) -> None:
+    """The lattice a band's modes ask for (resonant costs) can be larger than the first
+    estimate's: the 50,022-DOF gearbox is admitted at 3.2 GB and refused at 6.3 GB. The last
+    band it can grow to (here: a band of 40 modes asked for) is checked with its own lattice
+    before its scan: a search that does not fit is refused, and the scan never runs."""
+    import importlib
+
+    band = importlib.import_module("rheolin.floquet.band")
+    large = importlib.import_module("rheolin.floquet.large")
+    resonance = importlib.import_module("rheolin.floquet.resonance")
+    system = _assembled(refined_example("rotor", 335), 3000.0).system
+    upfront = large.band_estimate(system, 1)
+    lattice = resonance.floquet_lattice
+
+    def resonant(system, order, **kwargs):  # the band's modes ask for two orders more
+        return lattice(system, order + 2, **kwargs)
+
+    scans: list[int] = []
+    certify = band.certify
+    monkeypatch.setattr(band, "certify", lambda *a, **k: scans.append(1) or certify(*a, **k))
+    monkeypatch.setattr(resonance, "floquet_lattice", resonant)
+    with pytest.raises(MemoryBudgetError, match=r"band modes.*lattice search of order 1"):
+        large.certified_band(system, 40, int(1.01 * upfront), 1)
+    assert scans == []
+    monkeypatch.setattr(resonance, "floquet_lattice", lattice)  # the band's own lattice fits
+    modes = large.certified_band(system, None, 10 * upfront, 1)
+    assert scans and modes.complement is not None

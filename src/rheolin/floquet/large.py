@@ -129,7 +129,9 @@ def certified_band(
     size doubling from ``start`` when given), refused with
     :class:`~rheolin.budget.MemoryBudgetError` before anything is built when the first band
     and the lattice search at ``order`` exceed the memory budget (a ``start`` that does not
-    fit is dropped)."""
+    fit is dropped), and again before the scan of the last band it can grow to, with the
+    lattice its modes ask for (larger than the first estimate's on the gearbox of 50,022
+    DOF: 5 harmonics against 3)."""
     from ..linalg.threads import single_thread_blas
 
     limit = resolve_budget(budget)
@@ -145,8 +147,24 @@ def certified_band(
             f"{format_bytes(limit)}; condense bodies (Craig-Bampton) or mesh the shafts more "
             "coarsely, or raise the budget (RHEOLIN_MEMORY_BUDGET or `memory_budget`)"
         )
+
+    def fits(modes: BandAveraged) -> None:  # the lattice the band's modes ask for
+        from .resonance import floquet_lattice
+
+        lattice = floquet_lattice(system, order, max_size=10**6, avg=modes)
+        need = band_memory(system, int(modes.lam.size)) + lattice_memory(system, lattice)
+        if need > limit:
+            raise MemoryBudgetError(
+                f"the band method ({2 * system.n} first-order DOFs, {modes.lam.size} band "
+                f"modes) with its lattice search of order {order} ({len(lattice)} harmonics, "
+                f"size {2 * system.n * len(lattice)}) needs an estimated {format_bytes(need)}, "
+                f"more than the memory budget of {format_bytes(limit)}; condense bodies "
+                "(Craig-Bampton) or mesh the shafts more coarsely, or raise the budget "
+                "(RHEOLIN_MEMORY_BUDGET or `memory_budget`)"
+            )
+
     with single_thread_blas():  # many small products: one thread
-        return band_modes(system, band, limit, start=start)
+        return band_modes(system, band, limit, start=start, fits=fits)
 
 
 def inertial_exponents(
