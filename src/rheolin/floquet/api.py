@@ -28,7 +28,7 @@ from .lattice_run import (
     floquet_on_lattice,
     lattice_auto,
 )
-from .result import FloquetResult
+from .result import FloquetResult, add_note
 from .sparse import floquet_sparse
 
 __all__ = [
@@ -309,7 +309,7 @@ def _floquet(
                 f"the dense Hill grid -{hset.indices.max()}..{hset.indices.max()} left the "
                 "verdict undecided; the lattice method decided it"
             )
-            lat.info["note"] = f"{lat.info['note']}; {why}" if lat.info.get("note") else why
+            add_note(lat.info, why)
             return lat
         return res
     if method == "auto":

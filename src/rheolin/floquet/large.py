@@ -140,28 +140,27 @@ def certified_band(
     if start is not None and estimate > limit:  # the smallest band instead
         start = None
         estimate = band_estimate(system, order)
-    if estimate > limit:
-        raise MemoryBudgetError(
-            f"the band method ({2 * system.n} first-order DOFs, lattice order {order}) needs "
-            f"an estimated {format_bytes(estimate)}, more than the memory budget of "
-            f"{format_bytes(limit)}; condense bodies (Craig-Bampton) or mesh the shafts more "
-            "coarsely, or raise the budget (RHEOLIN_MEMORY_BUDGET or `memory_budget`)"
-        )
+
+    def refuse(what: str, need: int) -> None:
+        if need > limit:
+            raise MemoryBudgetError(
+                f"the band method ({2 * system.n} first-order DOFs, {what}) needs an estimated "
+                f"{format_bytes(need)}, more than the memory budget of {format_bytes(limit)}; "
+                "condense bodies (Craig-Bampton) or mesh the shafts more coarsely, or raise "
+                "the budget (RHEOLIN_MEMORY_BUDGET or `memory_budget`)"
+            )
+
+    refuse(f"lattice order {order}", estimate)
 
     def fits(modes: BandAveraged) -> None:  # the lattice the band's modes ask for
         from .resonance import floquet_lattice
 
         lattice = floquet_lattice(system, order, max_size=10**6, avg=modes)
-        need = band_memory(system, int(modes.lam.size)) + lattice_memory(system, lattice)
-        if need > limit:
-            raise MemoryBudgetError(
-                f"the band method ({2 * system.n} first-order DOFs, {modes.lam.size} band "
-                f"modes) with its lattice search of order {order} ({len(lattice)} harmonics, "
-                f"size {2 * system.n * len(lattice)}) needs an estimated {format_bytes(need)}, "
-                f"more than the memory budget of {format_bytes(limit)}; condense bodies "
-                "(Craig-Bampton) or mesh the shafts more coarsely, or raise the budget "
-                "(RHEOLIN_MEMORY_BUDGET or `memory_budget`)"
-            )
+        refuse(
+            f"{modes.lam.size} band modes, with its lattice search of order {order}: "
+            f"{len(lattice)} harmonics, size {2 * system.n * len(lattice)}",
+            band_memory(system, int(modes.lam.size)) + lattice_memory(system, lattice),
+        )
 
     with single_thread_blas():  # many small products: one thread
         return band_modes(system, band, limit, start=start, fits=fits)

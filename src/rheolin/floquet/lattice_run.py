@@ -29,7 +29,7 @@ from .confirm import (
 from .continuation import Continuation
 from .footprint import lattice_memory
 from .resonance import floquet_lattice
-from .result import FloquetResult, floquet_result
+from .result import FloquetResult, add_note, floquet_result
 from .search import lattice_exponents
 
 __all__ = [
@@ -135,7 +135,7 @@ def _lattice_auto(
             )  # fmt: skip
         except MemoryBudgetError as exc:  # found more eigenvectors than estimated
             why = f"undecided at lattice order {p}; order {p + 1} was stopped: {exc}"
-            res.info["note"] = f"{res.info['note']}; {why}" if res.info.get("note") else why
+            add_note(res.info, why)
             break
         tried.append(p)
         p += 1
@@ -261,7 +261,7 @@ def floquet_on_lattice(
     refused = res.info.pop("memory_refused", None)
     if refused and not res.decided:
         why = f"a confirmation on a finer lattice was stopped: {refused}"
-        res.info["note"] = f"{res.info['note']}; {why}" if res.info.get("note") else why
+        add_note(res.info, why)
     return res
 
 

@@ -21,6 +21,7 @@ __all__ = [
     "SPLIT_FACTOR",
     "TRUNCATION_SAFETY",
     "FloquetResult",
+    "add_note",
     "failed_result",
     "guarded",
 ]
@@ -411,6 +412,16 @@ def failed_result(reason: str) -> FloquetResult:
         complete=False,
         info={"error": reason},
     )
+
+
+def add_note(info: dict[str, Any], why: str) -> None:
+    """Append ``why`` to ``info["note"]`` (``"; "`` between notes).
+
+    >>> info = {"note": "order 1 undecided"}
+    >>> add_note(info, "order 2 was stopped"); info["note"]
+    'order 1 undecided; order 2 was stopped'
+    """
+    info["note"] = f"{info['note']}; {why}" if info.get("note") else why
 
 
 def guarded(check: Callable[..., FloquetResult], *args: Any, **kwargs: Any) -> FloquetResult:
