@@ -174,10 +174,15 @@ def test_rotating_damping_onset(ratio: float) -> None:
 
 
 # --------------------------------------------------------------------------- worker processes
-def test_map_on_workers_against_mathieu() -> None:
+@pytest.mark.parametrize("forked", [False, True])
+def test_map_on_workers_against_mathieu(forked: bool) -> None:
     """The gear pair's principal band on two worker processes (speeds in contiguous blocks,
     each continued within itself; the bounds refined here afterwards): the Mathieu bounds,
-    and speed by speed the verdicts and largest real parts of the map in one process."""
+    and speed by speed the verdicts and largest real parts of the map in one process. On the
+    workers ``local_workers`` gives, and on forked ones (each verdict reported through the
+    executor's queue)."""
+    from rheolin.study.executor import ForkExecutor
+
     rb1 = MODULE * Z1 / 2 * np.cos(ALPHA)
     rb2 = MODULE * Z2 / 2 * np.cos(ALPHA)
     omega0 = np.sqrt(K0 * (rb1**2 / J1 + rb2**2 / J2))
@@ -187,10 +192,15 @@ def test_map_on_workers_against_mathieu() -> None:
     H = rl.HarmonicSet(mesh * np.arange(0, 5))
     speeds = np.linspace(lo - 0.3 * (hi - lo), hi + 0.3 * (hi - lo), 6)
     seen: list[tuple[int, float]] = []
-    smap = stability_map(
-        model, speeds, harmonics=H, refine=1e-6, workers=2,
-        progress=lambda i, r: seen.append((i, r.max_real)),
-    )  # fmt: skip
+    pool = ForkExecutor(2) if forked else None
+    try:
+        smap = stability_map(
+            model, speeds, harmonics=H, refine=1e-6, workers=2, client=pool,
+            progress=lambda i, r: seen.append((i, r.max_real)),
+        )  # fmt: skip
+    finally:
+        if pool is not None:
+            pool.close()
     (r,) = smap.ranges
     assert r.lower == pytest.approx(lo, rel=2e-5), (r.lower, lo)
     assert r.upper == pytest.approx(hi, rel=2e-5), (r.upper, hi)

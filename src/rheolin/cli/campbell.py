@@ -77,7 +77,6 @@ def campbell(
     out_dir = output_dir(out, f"{model.stem}_campbell")
     if spinning.size:
         preflight(lm, spinning, None, None, needs_load=False)
-    from ..plots.campbell import plot_campbell
     from ..results.dataset import write_dataset
 
     set_kept(f"nothing written; {out_dir} is unchanged")
@@ -85,12 +84,18 @@ def campbell(
 
         def diagram() -> Any:
             with counted("Campbell diagram", w.size, "speeds") as step:
-                return campbell_fn(lm.model, w, progress=step)
+                out = campbell_fn(lm.model, w, progress=step)
+            # Matplotlib (a second to load) while the stability check's workers still run
+            import rheolin.plots.campbell  # noqa: F401
+
+            return out
 
         if spinning.size:
             result, (smap, why) = _with_stability(lm.model, w, flag, accuracy, workers, diagram)
         else:
             result, smap, why = diagram(), None, "standstill only"
+    from ..plots.campbell import plot_campbell  # loaded by diagram()
+
     with sigterm_as_interrupt(), staged_output(out_dir, CAMPBELL_FILES) as stage:
         ds = result.to_dataset()
         ds.attrs.update(model_file=str(model), model_sha256=lm.sha256, rheolin_version=__version__)
@@ -169,8 +174,8 @@ def _with_stability(
     diagram: Callable[[], Any],
 ) -> tuple[Any, tuple[Any, str]]:
     """The diagram and the stability map over the Campbell speeds (None and why when it is
-    not computed). With more than one worker the map's blocks run on a local cluster while
-    this process computes the diagram."""
+    not computed). With more than one worker the map's blocks run on local worker processes
+    while this process computes the diagram."""
     if flag is False:
         return diagram(), (None, "--stability off")
     from ..budget import format_bytes, memory_budget
@@ -192,7 +197,7 @@ def _with_stability(
         result = diagram()
         with counted("Floquet stability", len(speeds), "speeds") as step:
             return result, _stability_map(model, speeds, flag, accuracy, lambda i: step(i + 1))
-    from ..study.executor import local_cluster
+    from ..study.executor import local_workers
 
     done: list[int] = []
     box: dict[str, Any] = {}
@@ -205,7 +210,9 @@ def _with_stability(
         except BaseException as exc:  # raised again in this thread
             box["error"] = exc
 
-    with local_cluster(n) as client:
+    # the workers are started here, before the check's thread (forked copies of this process
+    # where that is safe: see local_workers)
+    with local_workers(n) as client:
         thread = threading.Thread(target=check, name="rheolin-stability", daemon=True)
         thread.start()
         result = diagram()

@@ -182,7 +182,9 @@ def run_sweep(
         return refuse(str(exc))
     write = functools.partial(write_results, plots=plots, quantity=quantity)
     try:
-        with _client(scheduler) as client, sigterm_as_interrupt(), StudyBar(err, spec) as bar:
+        # local workers are started before the bar's thread (forked where that is safe)
+        with _client(scheduler, run.get("workers")) as client, sigterm_as_interrupt(), \
+                StudyBar(err, spec) as bar:  # fmt: skip
             result = run_study(spec, client=client, progress=bar, write=write, **run)
     except StudyInterrupted as exc:
         err.print(
@@ -203,10 +205,18 @@ def run_sweep(
 
 
 @contextlib.contextmanager
-def _client(address: str | None) -> Iterator[Any]:
-    """A client of an existing cluster (not closed with the study's end), or None."""
+def _client(address: str | None, workers: int | None = 1) -> Iterator[Any]:
+    """A client of an existing cluster (not closed with the study's end); without one, the
+    local workers of ``workers`` > 1 (None: a core each;
+    :func:`~rheolin.study.executor.local_workers`), or None."""
     if address is None:
-        yield None
+        if workers is not None and workers <= 1:
+            yield None
+            return
+        from ..study.executor import local_workers
+
+        with local_workers(workers) as ex:
+            yield ex
         return
     from distributed import Client
 

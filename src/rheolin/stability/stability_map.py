@@ -258,8 +258,9 @@ def stability_map(
         Relative accuracy of each speed's largest real part (:func:`rheolin.floquet`; None:
         not refined beyond what the verdict needs, ``max_real_uncertainty`` says how far).
     workers
-        Worker processes for the speeds' verdicts (a local Dask cluster, one BLAS thread
-        each): the speeds are split into contiguous blocks
+        Worker processes for the speeds' verdicts (one BLAS thread each: forked copies of
+        this process where that is safe, else a local Dask cluster;
+        :func:`~rheolin.study.executor.local_workers`): the speeds are split into contiguous blocks
         (:func:`~rheolin.stability.verdicts.blocks_of`: the runs that are continued from
         speed to speed apart, the longest halved until there are two blocks per worker),
         each continued within itself, and each worker gets its share of the memory budget;
@@ -267,7 +268,9 @@ def stability_map(
         that report is late, as its block ends). 1 (default): in this process. The
         range bounds are refined here afterwards.
     client
-        A ``distributed.Client`` to run the blocks on instead (``workers`` is then ignored).
+        A ``distributed.Client``, or an executor of :mod:`rheolin.study.executor`
+        (:func:`~rheolin.study.executor.local_workers`), to run the blocks on instead
+        (``workers`` is then ignored).
 
     Examples
     --------

@@ -181,10 +181,21 @@ def _topic(key: str) -> str:
 
 
 def _reporter(task: Verdicts) -> Callable[[int, FloquetResult], None] | None:
-    """``report(i, result)`` as a Dask event of the worker this runs on (the map's index and the
-    pickled result: events travel as msgpack), None outside a worker or when no one listens."""
+    """``report(i, result)`` as an event of the worker this runs on (the map's key, index and
+    the pickled result: Dask's events travel as msgpack), on a forked worker's queue
+    (:func:`~rheolin.study.executor.worker_events`) or as a Dask event; None outside a worker
+    or when no one listens."""
     if not task.events:
         return None
+    from ..study.executor import worker_events
+
+    queue = worker_events()
+    if queue is not None:
+
+        def put(i: int, res: FloquetResult) -> None:
+            queue.put({"key": task.key, "index": task.offset + i, "result": pickle.dumps(res)})
+
+        return put
     try:
         from distributed import get_worker
 
@@ -214,11 +225,15 @@ def in_parallel(
     from dataclasses import replace
 
     from ..budget import memory_budget as default_budget
-    from ..study.executor import DaskExecutor, local_cluster
+    from ..study.executor import DaskExecutor, ForkExecutor, local_workers
 
     speeds = task.speeds
     n = int(workers) if workers is not None else 1
-    if client is not None:
+    if isinstance(client, ForkExecutor):
+        n = client.workers
+    elif isinstance(client, DaskExecutor):
+        n = max(1, sum(client.client.nthreads().values()))
+    elif client is not None:
         n = max(1, sum(client.nthreads().values()))
     blocks = blocks_of(speeds, 2 * n)
     share = default_budget(task.memory_budget) // max(min(n, len(blocks)), 1)
@@ -226,7 +241,7 @@ def in_parallel(
     results: list[FloquetResult | None] = [None] * speeds.size
     continued = 0
     reported: set[int] = set()
-    events: queue.SimpleQueue[Any] = queue.SimpleQueue()
+    events: Any = queue.SimpleQueue()
 
     def report(i: int, res: FloquetResult) -> None:
         if progress is not None and i not in reported:
@@ -241,11 +256,18 @@ def in_parallel(
                 return
             report(int(msg["index"]), pickle.loads(msg["result"]))
 
-    context = contextlib.nullcontext(client) if client is not None else local_cluster(n)
-    with context as c:
-        ex = DaskExecutor(c)
-        if progress is not None:  # events arrive on the client's thread: queued for this one
-            c.subscribe_topic(_topic(key), lambda event: events.put(event[1]))
+    if isinstance(client, (ForkExecutor, DaskExecutor)):
+        context: Any = contextlib.nullcontext(client)
+    elif client is not None:
+        context = contextlib.nullcontext(DaskExecutor(client))
+    else:
+        context = local_workers(n)
+    with context as ex:
+        if isinstance(ex, DaskExecutor) and progress is not None:
+            # events arrive on the client's thread: queued for this one
+            ex.client.subscribe_topic(_topic(key), lambda event: events.put(event[1]))
+        elif isinstance(ex, ForkExecutor):
+            events = _Forwarded(ex.events, key)
         try:
             running = {}
             for b in blocks:
@@ -267,7 +289,24 @@ def in_parallel(
                     results[int(i)] = res
                     report(int(i), res)
         finally:
-            if progress is not None:
+            if isinstance(ex, DaskExecutor) and progress is not None:
                 with contextlib.suppress(Exception):
-                    c.unsubscribe_topic(_topic(key))
+                    ex.client.unsubscribe_topic(_topic(key))
     return [r for r in results if r is not None], continued
+
+
+class _Forwarded:
+    """A forked pool's event queue read as the map's own (``get_nowait``): the events of
+    this map's key; others (an earlier map's late reports) are dropped."""
+
+    def __init__(self, source: Any, key: str) -> None:
+        self.source, self.key = source, key
+
+    def get_nowait(self) -> Any:
+        import queue
+
+        while not self.source.empty():
+            msg = self.source.get()
+            if msg.get("key") == self.key:
+                return msg
+        raise queue.Empty

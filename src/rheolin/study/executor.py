@@ -1,8 +1,12 @@
-"""Where tasks run: in this process (serial), or on a Dask cluster (``dask.distributed``).
+"""Where tasks run: in this process (serial), on a Dask cluster (``dask.distributed``), or
+on copies of this process (:class:`ForkExecutor`, for the short maps of a command).
 
-Both executors offer the same three calls (``submit``, ``next_done``, ``cancel``), so a study
+The executors offer the same three calls (``submit``, ``next_done``, ``cancel``), so a study
 has one code path. :func:`local_cluster` starts the default cluster: processes with one
 thread each (the solvers hold the GIL in SuperLU), one BLAS thread per worker.
+:func:`local_workers` gives forked workers where this process can be forked safely (the
+workers start in milliseconds with everything this process has imported: a stability map
+of a few seconds a speed does not wait for a cluster), else a local cluster.
 
 :class:`Planner` cuts the points still to do into chunks: the first tasks have one point each,
 then chunks aim at :data:`TARGET_SECONDS` from the measured time per point, so progress and
@@ -12,8 +16,10 @@ chunking never changes a result: every point is solved on its own.
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import contextlib
 import logging
+import multiprocessing
 import os
 import signal
 import threading
@@ -25,10 +31,13 @@ __all__ = [
     "BLAS_ENV",
     "TARGET_SECONDS",
     "DaskExecutor",
+    "ForkExecutor",
     "Planner",
     "SerialExecutor",
     "cores",
     "local_cluster",
+    "local_workers",
+    "worker_events",
 ]
 
 #: Environment of every worker process: one BLAS/OpenMP thread.
@@ -210,6 +219,117 @@ def local_cluster(workers: int | None = None) -> Iterator[Any]:
                 client.close()
             with contextlib.suppress(Exception):
                 cluster.close()
+
+
+#: In a :class:`ForkExecutor`'s worker: the queue its tasks report events on (None elsewhere).
+_EVENTS: Any = None
+
+
+def worker_events() -> Any:
+    """The event queue of the :class:`ForkExecutor` this process is a worker of, or None."""
+    return _EVENTS
+
+
+def _fork_worker(events: Any) -> None:
+    """A forked worker's start: one BLAS thread (the environment is read when a BLAS library
+    loads, which happened in the parent), Ctrl-C left to the parent (which ends the pool),
+    and the pool's event queue."""
+    global _EVENTS
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(1)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _EVENTS = events
+
+
+def _started() -> int:
+    return os.getpid()
+
+
+class ForkExecutor:
+    """Tasks on ``workers`` forked copies of this process (``concurrent.futures``); results
+    in completion order. The workers are forked when it is made, so it must be made before
+    this process starts any other thread (a fork copies only the calling thread, and a lock
+    another thread held would stay locked in the copy): :func:`fork_safe`. ``events``: a
+    queue the workers' tasks may report on (:func:`worker_events`)."""
+
+    def __init__(self, workers: int) -> None:
+        ctx = multiprocessing.get_context("fork")
+        self.workers = max(1, int(workers))
+        self.slots = 2 * self.workers
+        self.events = ctx.SimpleQueue()
+        self._pool = cf.ProcessPoolExecutor(
+            self.workers, mp_context=ctx, initializer=_fork_worker, initargs=(self.events,)
+        )
+        # with the fork start method every worker is started at the first submit
+        self._pool.submit(_started).result()
+        self._futures: dict[int, cf.Future[Any]] = {}
+        self._count = 0
+
+    def submit(self, fn: Callable[[Any], Any], task: Any) -> int:
+        self._count += 1
+        self._futures[self._count] = self._pool.submit(fn, task)
+        return self._count
+
+    def ready(self, timeout: float) -> bool:
+        """Whether a task has ended (waiting up to ``timeout`` seconds for one)."""
+        if not self._futures:
+            return True
+        done, _ = cf.wait(self._futures.values(), timeout=timeout, return_when=cf.FIRST_COMPLETED)
+        return bool(done)
+
+    def next_done(self) -> tuple[int, Any, BaseException | None]:
+        cf.wait(self._futures.values(), return_when=cf.FIRST_COMPLETED)
+        handle = next(h for h, f in self._futures.items() if f.done())
+        future = self._futures.pop(handle)
+        try:
+            return handle, future.result(), None
+        except Exception as exc:  # the task raised, or a worker died (BrokenProcessPool)
+            return handle, None, exc
+
+    def cancel(self) -> None:
+        for f in self._futures.values():
+            f.cancel()
+        self._futures.clear()
+
+    def close(self) -> None:
+        """Ends the workers, those still running a task included."""
+        self.cancel()
+        # a running task is not cancelled by the pool: its worker is ended (Ctrl-C, or an
+        # error in another task), not waited for
+        for proc in list(getattr(self._pool, "_processes", {}).values()):
+            with contextlib.suppress(Exception):
+                proc.terminate()
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+def fork_safe() -> bool:
+    """Whether this process may be forked for workers now: the platform forks (not Windows,
+    not macOS, whose system libraries are not fork-safe) and this is its only thread."""
+    import sys
+
+    return (
+        sys.platform.startswith("linux")
+        and "fork" in multiprocessing.get_all_start_methods()
+        and threading.active_count() == 1
+    )
+
+
+@contextlib.contextmanager
+def local_workers(workers: int | None = None) -> Iterator[Any]:
+    """An executor on ``workers`` local processes (default: the cores available): a
+    :class:`ForkExecutor` where :func:`fork_safe`, else a :class:`DaskExecutor` on a
+    :func:`local_cluster`; ended on exit."""
+    n = workers or cores()
+    if fork_safe():
+        ex = ForkExecutor(n)
+        try:
+            yield ex
+        finally:
+            ex.close()
+        return
+    with local_cluster(n) as client:
+        yield DaskExecutor(client)
 
 
 @contextlib.contextmanager

@@ -23,7 +23,14 @@ import xarray as xr
 from ..budget import memory_budget
 from .assemble import assemble, maps_dataset
 from .chunks import floquet_results
-from .executor import DaskExecutor, Planner, SerialExecutor, cores, local_cluster
+from .executor import (
+    DaskExecutor,
+    ForkExecutor,
+    Planner,
+    SerialExecutor,
+    cores,
+    local_workers,
+)
 from .spec import Settings, StudySpec
 from .store import CheckpointStore, MemoryStore
 from .worker import (
@@ -141,11 +148,13 @@ def run_study(
     overwrite
         Discard another study's checkpoint and results in ``out`` instead of refusing.
     client
-        A ``distributed.Client``: run on that cluster.
+        A ``distributed.Client``: run on that cluster; or an executor of
+        :mod:`rheolin.study.executor` (:func:`~rheolin.study.executor.local_workers`).
     workers
-        Without ``client``: 1 runs in this process (no Dask), more start a local cluster of
-        that many processes for this study (at most one per missing point), None as many as
-        there are cores.
+        Without ``client``: 1 runs in this process (no Dask), more start that many local
+        worker processes for this study (at most one per missing point; forked copies of this
+        process where that is safe, else a local Dask cluster), None as many as there are
+        cores.
     chunk_size
         Points per task, rounded up to whole continuation blocks (default: adaptive, see
         :class:`~rheolin.study.executor.Planner`).
@@ -232,11 +241,13 @@ class _State:
 @contextlib.contextmanager
 def _executor(client: Any, workers: int | None, pending: int) -> Iterator[Any]:
     n = min(cores() if workers is None else workers, pending)
-    if client is not None:
+    if isinstance(client, (DaskExecutor, ForkExecutor)):
+        yield client
+    elif client is not None:
         yield DaskExecutor(client)
     elif n > 1:
-        with local_cluster(n) as c:
-            yield DaskExecutor(c)
+        with local_workers(n) as ex:
+            yield ex
     else:
         yield SerialExecutor()
 
