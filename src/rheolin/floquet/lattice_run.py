@@ -290,7 +290,12 @@ class Chain:
                 break
             clusters = int(open_centres(out, system.omega).size)
             est_finer = lattice_memory(system, finer, clusters=clusters)
-            if est_finer > self.room:
+            if est_finer > self.room:  # said in the verdict's note when it stays open
+                self.refused = (
+                    f"the search of {clusters} open clusters on the lattice of {len(finer)} "
+                    f"harmonics needs an estimated {format_bytes(est_finer)}, more than the "
+                    f"{format_bytes(self.room)} the memory budget leaves it"
+                )
                 break
             self.used = max(self.used, self.held + est_finer)
             previous = continuation.start(system.n, finer) if continuation is not None else None
