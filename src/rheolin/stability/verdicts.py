@@ -228,13 +228,10 @@ def in_parallel(
     from ..study.executor import DaskExecutor, ForkExecutor, local_workers
 
     speeds = task.speeds
-    n = int(workers) if workers is not None else 1
-    if isinstance(client, ForkExecutor):
-        n = client.workers
-    elif isinstance(client, DaskExecutor):
-        n = max(1, sum(client.client.nthreads().values()))
-    elif client is not None:
-        n = max(1, sum(client.nthreads().values()))
+    if client is not None and not isinstance(client, (ForkExecutor, DaskExecutor)):
+        client = DaskExecutor(client)  # a distributed.Client
+    # an executor has two slots per worker
+    n = client.slots // 2 if client is not None else int(workers) if workers is not None else 1
     blocks = blocks_of(speeds, 2 * n)
     share = default_budget(task.memory_budget) // max(min(n, len(blocks)), 1)
     key = uuid.uuid4().hex
@@ -256,12 +253,7 @@ def in_parallel(
                 return
             report(int(msg["index"]), pickle.loads(msg["result"]))
 
-    if isinstance(client, (ForkExecutor, DaskExecutor)):
-        context: Any = contextlib.nullcontext(client)
-    elif client is not None:
-        context = contextlib.nullcontext(DaskExecutor(client))
-    else:
-        context = local_workers(n)
+    context = contextlib.nullcontext(client) if client is not None else local_workers(n)
     with context as ex:
         if isinstance(ex, DaskExecutor) and progress is not None:
             # events arrive on the client's thread: queued for this one
