@@ -79,3 +79,31 @@ def test_fork_executor_closes_its_running_workers() -> None:
     t0 = time.monotonic()
     ex.close()
     assert time.monotonic() - t0 < 10.0
+
+
+def test_workers_end_quietly_under_a_commands_sigterm_handler(
+    capfd: pytest.CaptureFixture[str],
+) -> None:
+    """A command forks its workers inside its SIGTERM handler (SIGTERM ends the command like
+    Ctrl-C); the workers must not keep that handler: closing the pool, with idle workers and
+    with a running one, prints nothing (each used to print a KeyboardInterrupt traceback)."""
+    import time
+
+    from rheolin.cli.errors import sigterm_as_interrupt
+
+    with sigterm_as_interrupt():
+        ex = ForkExecutor(2)
+        try:
+            h = ex.submit(_where, None)
+            assert ex.ready(timeout=30.0)
+            assert ex.next_done()[0] == h
+        finally:
+            ex.close()
+        ex = ForkExecutor(1)
+        ex.submit(time.sleep, 60.0)
+        time.sleep(0.5)  # the task is running
+        t0 = time.monotonic()
+        ex.close()
+        assert time.monotonic() - t0 < 10.0
+    err = capfd.readouterr().err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err

@@ -233,12 +233,16 @@ def worker_events() -> Any:
 def _fork_worker(events: Any) -> None:
     """A forked worker's start: one BLAS thread (the environment is read when a BLAS library
     loads, which happened in the parent), Ctrl-C left to the parent (which ends the pool),
-    and the pool's event queue."""
+    SIGTERM back to its default (the parent's handler, a command's
+    :func:`~rheolin.cli.errors.sigterm_as_interrupt`, is copied by the fork: the pool's
+    ``close`` would make each worker print a KeyboardInterrupt traceback) and the pool's
+    event queue."""
     global _EVENTS
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(1)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     _EVENTS = events
 
 
@@ -294,12 +298,14 @@ class ForkExecutor:
 
     def close(self) -> None:
         """Ends the workers, those still running a task included."""
+        running = any(not f.done() for f in self._futures.values())
         self.cancel()
-        # a running task is not cancelled by the pool: its worker is ended (Ctrl-C, or an
-        # error in another task), not waited for
-        for proc in list(getattr(self._pool, "_processes", {}).values()):
-            with contextlib.suppress(Exception):
-                proc.terminate()
+        if running:
+            # a running task is not cancelled by the pool: its worker is ended (Ctrl-C, or
+            # an error in another task), not waited for
+            for proc in list(getattr(self._pool, "_processes", {}).values()):
+                with contextlib.suppress(Exception):
+                    proc.terminate()
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
