@@ -230,8 +230,7 @@ def in_parallel(
     speeds = task.speeds
     if client is not None and not isinstance(client, (ForkExecutor, DaskExecutor)):
         client = DaskExecutor(client)  # a distributed.Client
-    # an executor has two slots per worker
-    n = client.slots // 2 if client is not None else int(workers) if workers is not None else 1
+    n = client.workers if client is not None else int(workers) if workers is not None else 1
     blocks = blocks_of(speeds, 2 * n)
     share = default_budget(task.memory_budget) // max(min(n, len(blocks)), 1)
     key = uuid.uuid4().hex

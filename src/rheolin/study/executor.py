@@ -141,7 +141,8 @@ class DaskExecutor:
         from distributed import as_completed
 
         self.client = client
-        self.slots = max(1, 2 * sum(client.nthreads().values()))
+        self.workers = max(1, sum(client.nthreads().values()))  # worker threads
+        self.slots = 2 * self.workers
         self._done = as_completed()
         self._futures: dict[Any, Any] = {}
 
