@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import dataclasses
 
 import numpy as np
 
@@ -20,6 +21,8 @@ __all__ = [
     "FAR",
     "LEAK_ENERGY",
     "confirm_unresolved",
+    "far_open",
+    "grown_further",
     "grown_lattice",
     "lattice_order",
     "open_centres",
@@ -145,15 +148,12 @@ def grown_lattice(out: LatticeExponents, lattice: Lattice, w: float) -> Lattice 
     >>> dict(zip(fine.generators, fine.costs)), fine.indices.tolist()
     ({3: 1, 7: 2, 50: 3}, [-7, -6, -3, 0, 3, 6, 7])
     """
-    if lattice.order != 1 or short_rows(out, w).any():
+    if lattice.order != 1:
         return None
-    todo = open_rows(out, w)
-    rows = todo.copy()  # with the clusters they share their quota with
-    for z in {z for i in np.flatnonzero(todo) for z in out.related[i]}:
-        rows |= _members(out.centre, z, w)
-    lead = float(out.exponents.real.max(initial=-np.inf))
-    if not (lead < 0 and np.all(out.exponents.real[rows] < FAR * lead)):
+    rows = far_open(out, w)
+    if rows is None:
         return None  # an open cluster near the axis: the whole next order
+    todo = open_rows(out, w)
     H = np.asarray(out.indices)
     nh = H.size
     singles = {
@@ -188,6 +188,109 @@ def grown_lattice(out: LatticeExponents, lattice: Lattice, w: float) -> Lattice 
     if grown is None or (standard is not None and len(grown) >= len(standard)):
         return None  # nothing saved: the standard orders
     return grown
+
+
+def far_open(out: LatticeExponents, w: float) -> np.ndarray | None:
+    """The open rows of ``out`` with the clusters they share their quota with, when every
+    one lies :data:`FAR` times further left than the leading exponent and no cluster is
+    short of exponents (None otherwise: an open cluster near the axis, or a missing
+    exponent, which the standard next order is to settle)."""
+    if short_rows(out, w).any():
+        return None
+    todo = open_rows(out, w)
+    rows = todo.copy()
+    for z in {z for i in np.flatnonzero(todo) for z in out.related[i]}:
+        rows |= _members(out.centre, z, w)
+    lead = float(out.exponents.real.max(initial=-np.inf))
+    if not (lead < 0 and np.all(out.exponents.real[rows] < FAR * lead)):
+        return None
+    return rows
+
+
+def grown_further(
+    out: LatticeExponents, fine: LatticeExponents, lattice: Lattice, w: float
+) -> Lattice | None:
+    """The lattice one order above ``lattice`` grown along the leaks of the clusters a
+    confirmation on ``lattice`` left open, when every one lies far left of the leading
+    exponent (:func:`far_open`; None: not that case, a leak along a step ``lattice`` holds
+    at a cost above 1, which one more order would not extend, or nothing saved against the
+    standard next order).
+
+    ``fine``: that confirmation's search (the open clusters' eigenvectors on ``lattice``);
+    ``out``: the verdict's exponents after it. A step is leaking when the harmonics of the
+    outer shell of ``lattice`` (order ``q``) that take it carry at least
+    :data:`LEAK_ENERGY` of an open eigenvector's energy (and each vector's strongest step
+    is one). Leaking steps cost ``q``, every other step ``c (q + 1)``, in a lattice of order
+    ``q (q + 1)``: the order-``q`` lattice and every combination of ``q + 1`` leaking steps.
+    Its outer shell, which the resolution test reads, is its top cost and every harmonic of
+    the order-``q`` outer shell that takes a step that is not leaking: the grown lattice
+    extends those only along the leaks, so they stay its edge.
+
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> from rheolin.harmonics.lattice import harmonic_lattice
+    >>> two = harmonic_lattice([3, 7], 2)
+    >>> two.indices.tolist()
+    [-14, -10, -7, -6, -4, -3, 0, 3, 4, 6, 7, 10, 14]
+    >>> y = np.zeros(2 * 13)  # one DOF: q then v; energy on 0, +-3 and +-6
+    >>> y[[3, 5, 6, 7, 9]] = [0.2, 0.3, 0.8, 0.3, 0.2]
+    >>> out = SimpleNamespace(
+    ...     indices=two.indices, exponents=np.array([-1 + 1j, -50 + 5j]), vectors=[None, y],
+    ...     unresolved=np.array([False, True]), certified=np.array([False, False]),
+    ...     complete=True, centre=np.array([1j, 5j]), related=[[], []])
+    >>> fine = grown_further(out, out, two, 1.0)
+    >>> fine.indices.tolist()
+    [-14, -10, -9, -7, -6, -4, -3, 0, 3, 4, 6, 7, 9, 10, 14]
+    >>> fine.indices[fine.boundary].tolist()  # 3 x 3, and what takes a step of 7
+    [-14, -10, -9, -4, 4, 9, 10, 14]
+    """
+    rows = far_open(out, w)
+    if rows is None:
+        return None
+    H = np.asarray(lattice.indices)
+    if not np.array_equal(np.asarray(fine.indices), H):
+        return None
+    nh, q = H.size, lattice.order
+    steps = np.asarray(lattice.steps)
+    outer = np.asarray(lattice.shell) == q
+    uses = {g: np.flatnonzero(outer & (steps[:, j] != 0)) for j, g in enumerate(lattice.generators)}
+    uses = {g: at for g, at in uses.items() if at.size}
+    centres = out.centre[rows]
+    mine = np.zeros(fine.exponents.size, dtype=bool)
+    for z in centres[np.isfinite(centres)]:
+        mine |= _members(fine.centre, z, w)
+    # (the search keeps the vectors of the upper half plane's representatives)
+    upper = fine.centre.imag >= -1e-9 * np.maximum(np.abs(fine.centre), w)
+    leaking: set[int] = set()
+    for i in np.flatnonzero(mine):
+        y = fine.vectors[i]
+        if y is None:
+            if upper[i]:
+                return None  # an open cluster whose leak is not known
+            continue
+        e = harmonic_energy(y, y.size // (2 * nh), nh)
+        total = float(e.sum())
+        if total <= 0 or not uses:
+            continue
+        share = {g: float(e[at].sum()) / total for g, at in uses.items()}
+        leaking.add(max(share, key=lambda g: share[g]))
+        leaking.update(g for g, s in share.items() if s >= LEAK_ENERGY)
+    cost = dict(zip(lattice.generators, lattice.costs, strict=True))
+    if not leaking or any(cost[g] != 1 for g in leaking):
+        return None  # a leak one more order would not extend: the standard next order
+    top = q * (q + 1)
+    grown = lattice_order(
+        lattice, top, {g: q if g in leaking else c * (q + 1) for g, c in cost.items()}
+    )
+    standard = lattice_order(lattice, q + 1)
+    if grown is None or (standard is not None and len(grown) >= len(standard)):
+        return None  # nothing saved: the standard orders
+    # the order-q edge that takes a step not leaking stays the edge
+    other = np.array([g not in leaking for g in lattice.generators])
+    edge = H[outer & np.any(steps[:, other] != 0, axis=1)] if other.any() else H[:0]
+    shell = np.asarray(grown.shell).copy()
+    shell[np.isin(grown.indices, edge)] = top
+    return dataclasses.replace(grown, shell=shell)
 
 
 def lattice_order(

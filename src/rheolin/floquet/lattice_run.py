@@ -20,6 +20,7 @@ from .accuracy import leading_uncertainty, refine_leading, refine_open
 from .band import BandAveraged, band_memory, band_vectors
 from .confirm import (
     confirm_unresolved,
+    grown_further,
     grown_lattice,
     open_centres,
     open_rows,
@@ -221,16 +222,16 @@ def floquet_on_lattice(
                 out = chain.run(out, [grown], grown=True)
                 if np.any(open_rows(out, system.omega)):
                     # the rows it settled stay; the rest from the coarse eigenvectors
-                    out = chain.run(out, standard, start=before)
+                    out = chain.run(out, standard, start=before, grow=True)
                 if np.any(open_rows(out, system.omega)):
                     # still open: every open cluster again, as without the grown lattice
                     # (a cluster searched apart from the others it was open with can miss
                     # the joint settlement)
                     for step in chain.steps:
                         step["kept"] = False
-                    out = chain.run(before, standard)
+                    out = chain.run(before, standard, grow=True)
             else:
-                out = chain.run(out, standard)
+                out = chain.run(out, standard, grow=True)
             steps, used = chain.steps, max(used, chain.used)
             if chain.refused:
                 out.info["memory_refused"] = chain.refused
@@ -279,44 +280,78 @@ class Chain:
         self.refused = ""  # why a finer search was stopped by the memory budget
 
     def run(
-        self, out: Any, lattices: list[Lattice], start: Any = None, *, grown: bool = False
+        self,
+        out: Any,
+        lattices: list[Lattice],
+        start: Any = None,
+        *,
+        grown: bool = False,
+        grow: bool = False,
     ) -> Any:
         """``out`` confirmed on ``lattices`` in turn; the first from ``start``'s
         eigenvectors (default: its own). ``grown``: the lattices are grown along the leaks
-        (recorded in each step, with its harmonics and whether its outcome was ``kept``)."""
-        system, continuation = self.system, self.continuation
+        (recorded in each step, with its harmonics and whether its outcome was ``kept``).
+        ``grow``: where a step leaves clusters open, all far left of the leading exponent,
+        the next step is first made on the lattice grown one order along their leaks
+        (:func:`~rheolin.floquet.confirm.grown_further`), from the eigenvectors the
+        verdict holds (``grown`` in the step); kept when it settles every open cluster,
+        else its outcome is dropped (``kept`` False) and the standard lattice follows, as
+        without it."""
+        system = self.system
+        w = system.omega
+        last: tuple[Lattice, Any] | None = None  # the previous step's lattice and search
         for finer in lattices:
-            if not np.any(open_rows(out, system.omega)):
+            if not np.any(open_rows(out, w)):
                 break
-            clusters = int(open_centres(out, system.omega).size)
-            est_finer = lattice_memory(system, finer, clusters=clusters)
-            if est_finer > self.room:  # said in the verdict's note when it stays open
-                self.refused = (
-                    f"the search of {clusters} open clusters on the lattice of {len(finer)} "
-                    f"harmonics needs an estimated {format_bytes(est_finer)}, more than the "
-                    f"{format_bytes(self.room)} the memory budget leaves it"
-                )
-                break
-            self.used = max(self.used, self.held + est_finer)
-            previous = continuation.start(system.n, finer) if continuation is not None else None
-            try:
-                out, fine = confirm_unresolved(
-                    system, out, finer, previous, start=start, room=self.room
-                )
-            except MemoryBudgetError as exc:  # more eigenvectors than estimated: out stands
-                self.refused = str(exc)
+            if grow and last is not None:
+                larger = grown_further(out, last[1], last[0], w)
+                if larger is not None and len(larger) < len(finer):
+                    before = snapshot(out)
+                    out, _, ok = self._step(out, larger, None, grown=True)
+                    if ok and not np.any(open_rows(out, w)):
+                        break
+                    out = before  # some stay open: the standard lattice, as without it
+                    if ok:
+                        self.steps[-1]["kept"] = False
+            out, fine, ok = self._step(out, finer, start, grown=grown)
+            if not ok:
                 break
             start = None
-            if continuation is not None and fine is not None:
-                continuation.keep(system.n, finer, fine)
-            step = out.info.pop("confirmed")
-            step["harmonics"] = len(finer)
-            step["grown"] = grown
-            step["kept"] = True
-            self.steps.append(step)
-            if not step["clusters"]:
+            last = (finer, fine) if fine is not None else None
+            if not self.steps[-1]["clusters"]:
                 break  # nothing left that a finer lattice could settle
         return out
+
+    def _step(self, out: Any, finer: Lattice, start: Any, *, grown: bool) -> tuple[Any, Any, bool]:
+        """One confirmation of ``out``'s open rows on ``finer`` (from ``start``'s
+        eigenvectors): ``(out, its search, False when the memory budget stopped it)``."""
+        system, continuation = self.system, self.continuation
+        clusters = int(open_centres(out, system.omega).size)
+        est_finer = lattice_memory(system, finer, clusters=clusters)
+        if est_finer > self.room:  # said in the verdict's note when it stays open
+            self.refused = (
+                f"the search of {clusters} open clusters on the lattice of {len(finer)} "
+                f"harmonics needs an estimated {format_bytes(est_finer)}, more than the "
+                f"{format_bytes(self.room)} the memory budget leaves it"
+            )
+            return out, None, False
+        self.used = max(self.used, self.held + est_finer)
+        previous = continuation.start(system.n, finer) if continuation is not None else None
+        try:
+            out, fine = confirm_unresolved(
+                system, out, finer, previous, start=start, room=self.room
+            )
+        except MemoryBudgetError as exc:  # more eigenvectors than estimated: out stands
+            self.refused = str(exc)
+            return out, None, False
+        if continuation is not None and fine is not None:
+            continuation.keep(system.n, finer, fine)
+        step = out.info.pop("confirmed")
+        step["harmonics"] = len(finer)
+        step["grown"] = grown
+        step["kept"] = True
+        self.steps.append(step)
+        return out, fine, True
 
 
 def search_result(
