@@ -32,6 +32,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import tempfile
 import time
@@ -151,10 +152,12 @@ def main() -> None:
             print(rows[-1], flush=True)
     total = time.perf_counter() - t_all
     peak = max(peak_before, peak_mb())
+    asked = os.environ.get("RHEOLIN_MEMORY_BUDGET")  # a budget set for the run
+    budget = f"RHEOLIN_MEMORY_BUDGET={asked} " if asked else ""
     rows.append(("total", f"{total:.0f} s, peak resident memory {peak:.0f} MB"))
     text = (
         f"# Gearbox in a {fe.n_dof:,}-DOF housing\n\n"
-        f"`OPENBLAS_NUM_THREADS=1 python bench/scale.py --element {args.element} --cutoff "
+        f"`{budget}OPENBLAS_NUM_THREADS=1 python bench/scale.py --element {args.element} --cutoff "
         f"{args.cutoff:g} --speed {args.speed:g}{' --stability' if args.stability else ''}"
         f"{f' --shaft-dof {args.shaft_dof}' if args.shaft_dof else ''}"
         f"{' --runup ' + ' '.join(f'{x:g}' for x in args.runup) if args.runup else ''}"
