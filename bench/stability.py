@@ -79,7 +79,7 @@ says more (``git show <commit>``).
 * ``search.WARM_STEPS`` (0e988ce): a first checkpoint at 4 steps for a search started from
   the previous speed's vectors halves the order-1 Arnoldi time (0.055 -> 0.026 s); a
   coarse-to-fine warm start gained nothing from it.
-* ``confirm.LEAK_ENERGY``, ``confirm.FAR`` (the grown confirmation lattice): over 250-6000 rpm
+* ``grown.LEAK_ENERGY``, ``grown.FAR`` (the grown confirmation lattice): over 250-6000 rpm
   every 250 rpm, one process, the two ways alternated twice: 20.3-21.1 CPU s against
   25.9-31.6 with order 2 (the same verdicts and largest real parts at all 24 speeds); the
   grown lattice holds 15-29 harmonics where order 2 holds 35-61. The threshold barely

@@ -63,7 +63,7 @@ STEEL_FILE = Path(__file__).parent / "data" / "gear_variant_steel.json"
 #: The short-period variant with the example's steel second stage (4.0e8 / 6.5e8 N/m, 2500 N
 #: s/m) and couplings (2 and 20 N m s/rad): the gearbox itself but for its tooth counts. At
 #: 500 rpm its order-2 confirmation leaves heavily damped exponents open that the lattice
-#: grown along their leaks settles (``rheolin.floquet.confirm.grown_further``).
+#: grown along their leaks settles (``rheolin.floquet.grown.grown_further``).
 STEEL: dict[str, Any] = {
     "stage2_scale": 1.0,
     "stage2_ratio": 6.5 / 4.0,

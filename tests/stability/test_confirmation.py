@@ -1,5 +1,5 @@
 """Open exponents confirmed on a lattice grown along the steps they leak to
-(``rheolin.floquet.confirm.grown_lattice``; docs/stability.md, section 4), against the
+(``rheolin.floquet.grown.grown_lattice``; docs/stability.md, section 4), against the
 monodromy matrix of the gear variant (gear_variants.py).
 
 Below its ranges (3000 rpm) the variant's order-1 lattice leaves heavily damped clusters

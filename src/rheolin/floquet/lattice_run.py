@@ -20,8 +20,6 @@ from .accuracy import leading_uncertainty, refine_leading, refine_open
 from .band import BandAveraged, band_memory, band_vectors
 from .confirm import (
     confirm_unresolved,
-    grown_further,
-    grown_lattice,
     open_centres,
     open_rows,
     snapshot,
@@ -29,6 +27,7 @@ from .confirm import (
 )
 from .continuation import Continuation
 from .footprint import lattice_memory
+from .grown import grown_further, grown_lattice
 from .resonance import floquet_lattice
 from .result import FloquetResult, add_note, floquet_result
 from .search import lattice_exponents
@@ -293,7 +292,7 @@ class Chain:
         (recorded in each step, with its harmonics and whether its outcome was ``kept``).
         ``grow``: where a step leaves clusters open, all far left of the leading exponent,
         the next step is first made on the lattice grown one order along their leaks
-        (:func:`~rheolin.floquet.confirm.grown_further`), from the eigenvectors the
+        (:func:`~rheolin.floquet.grown.grown_further`), from the eigenvectors the
         verdict holds (``grown`` in the step); kept when it settles every open cluster,
         else its outcome is dropped (``kept`` False) and the standard lattice follows, as
         without it."""
@@ -304,8 +303,8 @@ class Chain:
             if not np.any(open_rows(out, w)):
                 break
             if grow and last is not None:
-                larger = grown_further(out, last[1], last[0], w)
-                if larger is not None and len(larger) < len(finer):
+                larger = grown_further(out, last[1], last[0], w)  # smaller than finer
+                if larger is not None:
                     before = snapshot(out)
                     out, _, ok = self._step(out, larger, None, grown=True)
                     if ok and not np.any(open_rows(out, w)):
