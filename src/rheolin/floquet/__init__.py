@@ -25,7 +25,8 @@ verdict), ``dense``, ``sparse`` and ``common`` (the grid paths), and for the lat
 (the modes it starts from and their Gershgorin discs), ``search`` (the search and its memory),
 ``shift_invert`` (its factors, Arnoldi and polish), ``select`` (one representative per
 exponent), ``representatives`` (their bounds and truncation estimates), ``checks``,
-``confirm``, ``continuation`` (over a sweep) and ``outcome``.
+``confirm``, ``continuation`` (over a sweep) and ``outcome``; ``reduced``: the verdict on a
+Craig-Bampton reduction of a large system (:mod:`rheolin.system.reduction`).
 """
 
 from ..harmonics.hill import hill_matrices, hill_pencil
@@ -42,6 +43,7 @@ from .checks import liouville_sum
 from .continuation import Continuation
 from .footprint import lattice_memory
 from .outcome import LatticeExponents
+from .reduced import floquet_reduced
 from .result import SAFETY, SPLIT_FACTOR, TRUNCATION_SAFETY, FloquetResult
 from .search import lattice_exponents
 
@@ -59,6 +61,7 @@ __all__ = [
     "dense_stability_harmonics",
     "floquet",
     "floquet_memory",
+    "floquet_reduced",
     "hill_matrices",
     "hill_pencil",
     "lattice_exponents",

@@ -215,6 +215,7 @@ def stability_map(
     rtol: float | None = None,
     workers: int | None = 1,
     client: Any = None,
+    reduce: Any = None,
 ) -> StabilityMap:
     """Largest Floquet real part of a :class:`~rheolin.mechanics.Model` against speed.
 
@@ -271,6 +272,13 @@ def stability_map(
         A ``distributed.Client``, or an executor of :mod:`rheolin.study.executor`
         (:func:`~rheolin.study.executor.local_workers`), to run the blocks on instead
         (``workers`` is then ignored).
+    reduce
+        A large model's map on its Craig-Bampton reduction (:mod:`rheolin.system.reduction`,
+        :func:`rheolin.floquet.reduced.floquet_reduced`): the cut-off [rad/s] of the
+        fixed-interface modes kept, or True for the default; the basis is made at the first
+        speed and shared by the others, and each verdict's uncertainty carries the estimate
+        of what the left-out modes change (docs/stability.md, section 9). None: the full
+        system at every speed.
 
     Examples
     --------
@@ -298,7 +306,7 @@ def stability_map(
     if workers is not None and int(workers) < 1:
         raise ValueError(f"`workers` must be >= 1, got {workers}")
     t0 = time.perf_counter()
-    task = Verdicts(model, speeds, harmonics, method, order, memory_budget, rtol)
+    task = Verdicts(model, speeds, harmonics, method, order, memory_budget, rtol, reduce=reduce)
     evaluate = task.evaluator()
     parallel = client is not None or (workers is not None and int(workers) > 1)
     if parallel and speeds.size > 1 and not callable(harmonics):

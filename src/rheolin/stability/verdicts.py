@@ -51,6 +51,7 @@ class Verdicts:
     key: str = ""  # a map's tasks share their model's speed template in a worker
     offset: int = 0  # the map's index of the first of ``speeds`` (a block on a worker)
     events: bool = False  # each verdict reported as a Dask event (someone is listening)
+    reduce: Any = None  # a Craig-Bampton cut-off [rad/s] (True: the default) for every speed
 
     def evaluator(self) -> Callable[..., tuple[Any, FloquetResult]]:
         """``evaluate(W, continuation, accuracy, lattice_order)``: the model assembled at
@@ -68,6 +69,24 @@ class Verdicts:
                 return as_harmonic_set(self.harmonics(system))
             return as_harmonic_set(self.harmonics)
 
+        reduced: dict[str, Any] = {}  # the Craig-Bampton basis, made at the first speed
+
+        def on_reduction(system: Any, **options: Any) -> FloquetResult:
+            from ..floquet.reduced import default_cutoff, floquet_reduced
+            from ..system.reduction import craig_bampton
+
+            if "basis" not in reduced:
+                cut = default_cutoff(system) if self.reduce is True else float(self.reduce)
+                reduced["basis"] = craig_bampton(system, cut)
+            # a speed that needed a higher cut-off hands its basis on to the next
+            return floquet_reduced(
+                system,
+                reduction=reduced["basis"],
+                used=reduced,
+                memory_budget=self.memory_budget,
+                **options,
+            )
+
         def evaluate(
             W: float,
             continuation: Any = None,
@@ -77,6 +96,10 @@ class Verdicts:
             # assembled once, rescaled at every speed (the same system as
             # ``model.assemble``, a fifteenth of its cost on the gearbox)
             a = template().assemble(float(W))
+            if self.reduce is not None and self.reduce is not False:
+                order = lattice_order if lattice_order is not None else self.order
+                res = on_reduction(a.system, order=order, continuation=continuation, rtol=accuracy)
+                return a, res
             if lattice_order is not None:
                 res = floquet(
                     a.system,

@@ -36,6 +36,14 @@
 
 from .constraints import LinearConstraint
 from .periodic import PeriodicSystem
+from .reduction import Reduction, craig_bampton
 from .rigid_modes import RigidModes, find_rigid_modes
 
-__all__ = ["LinearConstraint", "PeriodicSystem", "RigidModes", "find_rigid_modes"]
+__all__ = [
+    "LinearConstraint",
+    "PeriodicSystem",
+    "Reduction",
+    "RigidModes",
+    "craig_bampton",
+    "find_rigid_modes",
+]
