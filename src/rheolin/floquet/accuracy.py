@@ -19,8 +19,15 @@ from ..budget import MemoryBudgetError
 from ..budget import memory_budget as resolve_budget
 from ..harmonics.lattice import Lattice
 from ..system.periodic import PeriodicSystem
-from .confirm import confirm_unresolved, lattice_order, open_centres, snapshot
+from .confirm import (
+    cluster_members,
+    confirm_unresolved,
+    lattice_order,
+    open_centres,
+    snapshot,
+)
 from .footprint import lattice_memory
+from .grown import FAR, grown_open
 from .outcome import LatticeExponents
 from .result import SAFETY
 
@@ -147,7 +154,8 @@ def refine_open(
     :meth:`~rheolin.floquet.FloquetResult.truncation_open` exponents (resolved, within ten
     truncation estimates of the axis) have their clusters searched again on the lattice one
     order above their own, near them only, up to :data:`OPEN_ORDERS` orders up, to the
-    order ``finest`` at most (None: no limit) and within the memory budget. Where that
+    order ``finest`` at most (None: no limit; an exponent already there is left as it is)
+    and within the memory budget. Where that
     lattice resolves a cluster with its full quota, its exponents replace the coarse ones
     with their own truncation estimates, and the verdict is judged by the same rules
     (agreement between orders certifies unresolved exponents only, never these). The rest
@@ -155,16 +163,27 @@ def refine_open(
     ``continuation`` (over a sweep): each search starts from the previous speed's on its
     lattice, and is kept for the next speed when the verdict is decided. Returns ``out``,
     the orders searched and the largest memory estimate among them.
+
+    Each step first grows, for the open exponents whose eigenvectors it holds on the lattice
+    they were resolved on, all far left of the leading exponent
+    (:data:`~rheolin.floquet.grown.FAR`), that lattice one step along their leaks
+    (:func:`~rheolin.floquet.grown.grown_open`) when it is smaller than the standard order
+    they would be searched on, and searches their clusters on it; its outcome is kept when
+    it decides the verdict or brings those clusters' exponents nearer the axis by their
+    uncertainty (``Re`` plus uncertainty smaller), and the next step grows from it;
+    otherwise it is dropped and those exponents take the standard order as without it
+    (``info["refined_grown"]`` records each such search).
     """
     orders: list[int] = []
     searches: list[tuple[Lattice, LatticeExponents]] = []
     used = 0
     limit = resolve_budget(budget)
     n, w = system.n, system.omega
+    last: tuple[Lattice, LatticeExponents] | None = None  # the grown search kept last
+    growing = True
     for step in range(OPEN_ORDERS + 1):
         verdict = judge(out)
-        rank = np.argsort(-out.exponents.real, kind="stable")  # the result's order
-        rows = rank[verdict.truncation_open()]
+        rows = _open_now(out, verdict)
         if verdict.decided and continuation is not None:
             # kept only when they decide: else the whole lattice is searched at the next
             # order, better started from the previous speed's search of all of it
@@ -172,13 +191,40 @@ def refine_open(
                 continuation.keep(n, kept_lattice, kept)
         if verdict.decided or rows.size == 0 or step == OPEN_ORDERS:
             break
+        grew = np.zeros(0, dtype=complex)  # the centres of the clusters grown this step
+        if growing:
+            out, grew, grown_step = _grow_open(
+                system, out, rows, lattice, judge, limit, finest, last
+            )
+            if grown_step is not None:
+                last = grown_step[0]
+                used = max(used, grown_step[1])
+            else:
+                growing = False
+            if grew.size:
+                verdict = judge(out)
+                if verdict.decided:
+                    continue  # the next step records it
+                rows = _open_now(out, verdict)
+                done = np.any([cluster_members(out.centre[rows], z, w) for z in grew], axis=0)
+                rows = rows[~done]
+        if finest is not None:
+            rows = rows[out.order[rows] < finest]  # those at the top stay as they are
+        if rows.size == 0:
+            if grew.size:
+                continue
+            break
         todo = np.any([_cluster_rows(out, int(i), w) for i in rows], axis=0)
         order = max(lattice.order, int(out.order[rows].max())) + 1
         finer = lattice_order(lattice, order) if finest is None or order <= finest else None
         if finer is None:
+            if grew.size:
+                continue
             break
         estimate = lattice_memory(system, finer, clusters=int(open_centres(out, w, todo).size))
         if estimate > limit:
+            if grew.size:
+                continue
             break
         used = max(used, estimate)
         previous = continuation.start(n, finer) if continuation is not None else None
@@ -193,6 +239,90 @@ def refine_open(
         if fine is not None:
             searches.append((finer, fine))
     return out, orders, used
+
+
+def _open_now(out: LatticeExponents, verdict: Any) -> np.ndarray:
+    """The rows of ``out`` whose truncation estimates keep ``verdict`` (its result) open."""
+    rank = np.argsort(-out.exponents.real, kind="stable")  # the result's order
+    return np.asarray(rank[verdict.truncation_open()], dtype=int)
+
+
+def _grow_open(
+    system: PeriodicSystem,
+    out: LatticeExponents,
+    rows: np.ndarray,
+    lattice: Lattice,
+    judge: Callable[[LatticeExponents], Any],
+    limit: int,
+    finest: int | None,
+    last: tuple[Lattice, LatticeExponents] | None,
+) -> tuple[LatticeExponents, np.ndarray, tuple[tuple[Lattice, LatticeExponents], int] | None]:
+    """One step of :func:`refine_open` on a lattice grown along the leaks of the open rows
+    ``rows`` (:func:`~rheolin.floquet.grown.grown_open`): from the grown search kept ``last``
+    or else from the eigenvectors ``out`` holds on its lattice. Returns ``out`` (the grown
+    search's exponents when kept, else as it was), the centres of the clusters it replaced
+    (none when not kept) and, when kept, ``(its lattice and search, its memory estimate)``."""
+    w = system.omega
+    none = np.zeros(0, dtype=complex)
+    src, held = (last[1], last[0]) if last is not None else (out, out.lattice)
+    if held is None or not np.array_equal(np.asarray(src.indices), np.asarray(held.indices)):
+        return out, none, None
+    lead = float(out.exponents.real.max(initial=-np.inf))
+    upper = out.centre.imag >= -1e-9 * np.maximum(np.abs(out.centre), w)
+    src_upper = src.centre.imag >= -1e-9 * np.maximum(np.abs(src.centre), w)
+    centres: list[complex] = []
+    mine = np.zeros(src.exponents.size, dtype=bool)  # the vectors the leaks are read from
+    for i in rows[upper[rows]]:
+        z = complex(out.centre[i])
+        there = cluster_members(src.centre, z, w) & src_upper
+        if (
+            not np.isfinite(z)
+            or not there.any()
+            or any(src.vectors[j] is None for j in np.flatnonzero(there))
+            or not (lead < 0 and out.exponents.real[i] < FAR * lead)
+        ):
+            continue  # its leaks not known here, or near the axis: the standard order
+        centres.append(z)
+        mine |= there
+    if not centres:
+        return out, none, None
+    grown = grown_open(src, mine, held)
+    if grown is None:
+        return out, none, None
+    near = np.array(centres)
+    todo = np.any([cluster_members(out.centre, z, w) for z in near], axis=0)
+    order = max(lattice.order, int(out.order[todo].max())) + 1
+    plain = lattice_order(lattice, order) if finest is None or order <= finest else None
+    if plain is not None and len(grown) >= len(plain):
+        return out, none, None  # nothing saved: the standard order
+    estimate = lattice_memory(system, grown, clusters=int(open_centres(out, w, todo).size))
+    record: dict[str, Any] = {
+        "order": grown.order, "harmonics": len(grown), "clusters": len(centres), "kept": False,
+    }  # fmt: skip
+    out.info.setdefault("refined_grown", []).append(record)
+    if estimate > limit:
+        record["refused"] = True
+        return out, none, None
+    before = snapshot(out)
+    reach = _reach(out, near, w)
+    steps = out.info.get("confirmed")
+    try:
+        got, fine = confirm_unresolved(system, out, grown, None, todo=todo, room=limit)
+    except MemoryBudgetError:  # more eigenvectors than estimated: as without it
+        record["refused"] = True
+        return before, none, None
+    _restore(got, steps)
+    if fine is not None and (judge(got).decided or _reach(got, near, w) < reach):
+        record["kept"] = True
+        return got, near, ((grown, fine), estimate)
+    return before, none, None
+
+
+def _reach(out: LatticeExponents, centres: np.ndarray, w: float) -> float:
+    """How far right the exponents of the clusters at ``centres`` reach by their
+    uncertainty: the largest real part plus uncertainty among them."""
+    rows = np.any([cluster_members(out.centre, z, w) for z in centres], axis=0)
+    return float(np.max(out.exponents.real[rows] + out.uncertainty[rows], initial=-np.inf))
 
 
 def _restore(out: LatticeExponents, steps: Any) -> None:

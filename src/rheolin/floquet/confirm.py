@@ -300,6 +300,7 @@ def _confirm(
     kept: list[np.ndarray | None] = [None] * int(keep.sum())
     out.vectors = kept + [v for v, t in zip(fine.vectors, take, strict=True) if t]
     out.indices = fine.indices
+    out.lattice = finer
     out.split_gap = split_gaps(out.exponents, finer.indices, system.omega)
     out.info["confirmed"] = {
         "order": finer.order,

@@ -14,7 +14,7 @@ from .confirm import cluster_members, lattice_order, open_rows, short_rows
 from .outcome import LatticeExponents
 from .shift_invert import harmonic_energy
 
-__all__ = ["FAR", "LEAK_ENERGY", "far_open", "grown_further", "grown_lattice"]
+__all__ = ["FAR", "LEAK_ENERGY", "far_open", "grown_further", "grown_lattice", "grown_open"]
 
 
 #: A step of the coarse lattice is a direction the open eigenvectors leak to when its two
@@ -176,6 +176,87 @@ def grown_further(
     edge = H[outer & np.any(steps[:, other] != 0, axis=1)] if other.any() else H[:0]
     shell = np.asarray(grown.shell).copy()
     shell[np.isin(grown.indices, edge)] = top
+    return dataclasses.replace(grown, shell=shell)
+
+
+def grown_open(out: LatticeExponents, rows: np.ndarray, lattice: Lattice) -> Lattice | None:
+    """The lattice ``lattice`` grown one step further along the leaks of the eigenvectors
+    of the rows ``rows`` (mask) of ``out``, which holds them on ``lattice``
+    (:func:`~rheolin.floquet.accuracy.refine_open`: exponents resolved there whose
+    truncation estimates keep the verdict open; None: a row without its vector, no leak, a
+    leak along a step that does not have the lattice's cheapest cost, or nothing grown).
+
+    A step is leaking when the harmonics of the outer shell of ``lattice`` (cost ``T``) that
+    take it carry at least :data:`LEAK_ENERGY` of a vector's energy (and each vector's
+    strongest step is one), as in :func:`grown_further`, which this is on a standard
+    lattice. With ``d`` the cheapest step cost, leaking steps cost ``c T``, every other step
+    ``c (T + d)``, in a lattice of order ``T (T + d)``: it holds ``lattice``, every
+    combination of leaking steps alone one step longer, and those with other steps where
+    their cost leaves room. (Not reduced by the
+    costs' common divisor: its order stays above the standard orders a refinement raises a
+    cluster to, like :func:`grown_further`'s, so its exponents are not taken for those.)
+    A lattice grown along the leaks grows again so (its leaking steps are its cheapest). A
+    leak along a dearer step is not grown (one more step of ``d`` would not extend it). The
+    harmonics of the outer shell that take a step that is not leaking stay the edge.
+
+    The lattice :func:`grown_further` grows from order 2 of the steps 3 and 7 along 3 (its
+    edge 3 x 3, 2 x 7 and the order-2 shell that takes a 7), grown again along 3:
+
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> from rheolin.harmonics.lattice import harmonic_lattice
+    >>> two = harmonic_lattice([3, 7], 2)
+    >>> y = np.zeros(2 * 13)  # as in grown_further: energy on 0, +-3 and +-6 of order 2
+    >>> y[[3, 5, 6, 7, 9]] = [0.2, 0.3, 0.8, 0.3, 0.2]
+    >>> out = SimpleNamespace(
+    ...     indices=two.indices, exponents=np.array([-1 + 1j, -50 + 5j]), vectors=[None, y],
+    ...     unresolved=np.array([False, True]), certified=np.array([False, False]),
+    ...     complete=True, centre=np.array([1j, 5j]), related=[[], []])
+    >>> grown = grown_further(out, out, two, 1.0)
+    >>> dict(zip(grown.generators, grown.costs)), grown.order
+    ({3: 2, 7: 3}, 6)
+    >>> grown.indices.tolist(), grown.indices[grown.boundary].tolist()
+    ([-14, -10, -9, -7, -6, -4, -3, 0, 3, 4, 6, 7, 9, 10, 14], [-14, -10, -9, -4, 4, 9, 10, 14])
+    >>> y = np.zeros(2 * 15)  # one DOF: q then v; energy on 0, +-3, +-6 and +-9
+    >>> y[[2, 4, 6, 7, 8, 10, 12]] = [0.2, 0.3, 0.3, 0.8, 0.3, 0.3, 0.2]
+    >>> out = SimpleNamespace(indices=grown.indices, vectors=[y])
+    >>> finer = grown_open(out, np.array([True]), grown)
+    >>> dict(zip(finer.generators, finer.costs)), finer.order
+    ({3: 12, 7: 24}, 48)
+    >>> finer.indices.tolist()  # +-12, and 7 - 6, 7 + 6 (one step of 3 more)
+    [-14, -13, -12, -10, -9, -7, -6, -4, -3, -1, 0, 1, 3, 4, 6, 7, 9, 10, 12, 13, 14]
+    >>> finer.indices[finer.boundary].tolist()  # 4 x 3, 7 +- 2 x 3, and what takes a 7
+    [-14, -13, -12, -10, -4, -1, 1, 4, 10, 12, 13, 14]
+
+    Energy on 10 = 7 + 3 leaks along 7, which costs more than 3 on ``grown``: not grown.
+
+    >>> y[[1, 13]] = 0.3
+    >>> grown_open(out, np.array([True]), grown) is None
+    True
+    """
+    H = np.asarray(lattice.indices)
+    if not np.array_equal(np.asarray(out.indices), H):
+        return None
+    nh, top = H.size, int(lattice.order)
+    steps = np.asarray(lattice.steps)
+    outer = np.asarray(lattice.shell) == top
+    uses = {g: np.flatnonzero(outer & (steps[:, j] != 0)) for j, g in enumerate(lattice.generators)}
+    uses = {g: at for g, at in uses.items() if at.size}
+    if not uses:
+        return None
+    leaking = _leaking([(out.vectors[i], True) for i in np.flatnonzero(rows)], uses, nh)
+    cost = dict(zip(lattice.generators, lattice.costs, strict=True))
+    d = min(cost.values())
+    if not leaking or any(cost[g] != d for g in leaking):
+        return None
+    costs = {g: c * top if g in leaking else c * (top + d) for g, c in cost.items()}
+    grown = lattice_order(lattice, top * (top + d), costs)
+    if grown is None or len(grown) <= nh:
+        return None
+    other = np.array([g not in leaking for g in lattice.generators])
+    edge = H[outer & np.any(steps[:, other] != 0, axis=1)] if other.any() else H[:0]
+    shell = np.asarray(grown.shell).copy()
+    shell[np.isin(grown.indices, edge)] = grown.order
     return dataclasses.replace(grown, shell=shell)
 
 

@@ -42,6 +42,9 @@ class LatticeExponents:
     #: vectors for a search on a finer lattice
     vectors: list[np.ndarray | None] = field(default_factory=list, repr=False)
     indices: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    #: the :class:`~rheolin.harmonics.lattice.Lattice` of ``indices`` (its steps, costs and
+    #: shells), on which a refinement grows the lattice along the vectors' leaks
+    lattice: Any = field(default=None, repr=False)
     #: the time-averaged modes (:class:`~rheolin.floquet.averaged.Averaged`) the search started from
     modes: Any = field(default=None, repr=False)
     #: truncation estimates not computed yet (``defer_truncation``): ``settle(self, rows)``

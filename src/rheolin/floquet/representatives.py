@@ -156,6 +156,7 @@ def lattice_result(
         info=info,
         vectors=vectors,
         indices=H,
+        lattice=lattice,
         modes=avg,
         rate=np.array(rates, dtype=complex),
     )
