@@ -149,10 +149,7 @@ def grown_further(
     if not np.array_equal(np.asarray(fine.indices), H):
         return None
     nh, q = H.size, lattice.order
-    steps = np.asarray(lattice.steps)
-    outer = np.asarray(lattice.shell) == q
-    uses = {g: np.flatnonzero(outer & (steps[:, j] != 0)) for j, g in enumerate(lattice.generators)}
-    uses = {g: at for g, at in uses.items() if at.size}
+    outer, uses = _outer_steps(lattice, q)
     if not uses:
         return None
     centres = out.centre[rows]
@@ -171,12 +168,7 @@ def grown_further(
     )
     if grown is None:
         return None
-    # the order-q edge that takes a step not leaking stays the edge
-    other = np.array([g not in leaking for g in lattice.generators])
-    edge = H[outer & np.any(steps[:, other] != 0, axis=1)] if other.any() else H[:0]
-    shell = np.asarray(grown.shell).copy()
-    shell[np.isin(grown.indices, edge)] = top
-    return dataclasses.replace(grown, shell=shell)
+    return _keep_edge(grown, lattice, outer, leaking)
 
 
 def grown_open(out: LatticeExponents, rows: np.ndarray, lattice: Lattice) -> Lattice | None:
@@ -238,10 +230,7 @@ def grown_open(out: LatticeExponents, rows: np.ndarray, lattice: Lattice) -> Lat
     if not np.array_equal(np.asarray(out.indices), H):
         return None
     nh, top = H.size, int(lattice.order)
-    steps = np.asarray(lattice.steps)
-    outer = np.asarray(lattice.shell) == top
-    uses = {g: np.flatnonzero(outer & (steps[:, j] != 0)) for j, g in enumerate(lattice.generators)}
-    uses = {g: at for g, at in uses.items() if at.size}
+    outer, uses = _outer_steps(lattice, top)
     if not uses:
         return None
     leaking = _leaking([(out.vectors[i], True) for i in np.flatnonzero(rows)], uses, nh)
@@ -253,6 +242,23 @@ def grown_open(out: LatticeExponents, rows: np.ndarray, lattice: Lattice) -> Lat
     grown = lattice_order(lattice, top * (top + d), costs)
     if grown is None or len(grown) <= nh:
         return None
+    return _keep_edge(grown, lattice, outer, leaking)
+
+
+def _outer_steps(lattice: Lattice, top: int) -> tuple[np.ndarray, dict[int, np.ndarray]]:
+    """The outer shell of ``lattice`` (cost ``top``, a mask) and, per step, the positions
+    of its harmonics that take that step (steps that none takes left out)."""
+    steps = np.asarray(lattice.steps)
+    outer = np.asarray(lattice.shell) == top
+    uses = {g: np.flatnonzero(outer & (steps[:, j] != 0)) for j, g in enumerate(lattice.generators)}
+    return outer, {g: at for g, at in uses.items() if at.size}
+
+
+def _keep_edge(grown: Lattice, lattice: Lattice, outer: np.ndarray, leaking: set[int]) -> Lattice:
+    """``grown`` with the harmonics of ``lattice``'s outer shell that take a step not
+    ``leaking`` set to its top cost: grown only along the leaks, they stay its edge."""
+    H = np.asarray(lattice.indices)
+    steps = np.asarray(lattice.steps)
     other = np.array([g not in leaking for g in lattice.generators])
     edge = H[outer & np.any(steps[:, other] != 0, axis=1)] if other.any() else H[:0]
     shell = np.asarray(grown.shell).copy()

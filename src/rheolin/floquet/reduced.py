@@ -170,6 +170,19 @@ def reduction_estimates(
     small = LatticeHill(reduced, H)
     pos = {int(h): j for j, h in enumerate(H)}
     w = system.omega
+    # per pair of terms, the harmonics n of both residuals with z at n + ka and p at n - kb
+    # on the lattice (the same for every exponent)
+    pairs = []
+    for a, (name_a, ka, _, _, _) in enumerate(terms):  # the left residual's coefficient
+        for b, (name_b, kb, _, _, _) in enumerate(terms):  # the right residual's
+            rows = [
+                (i, pos[int(h) + ka], pos[int(h) - kb])
+                for i, h in enumerate(H)
+                if int(h) + ka in pos and int(h) - kb in pos
+            ]
+            if rows:
+                n_, zi, pi = (np.array(v) for v in zip(*rows, strict=True))
+                pairs.append((G[a, b], name_a, name_b, n_, zi, pi))
     out = np.zeros(lam.size, dtype=complex)
     rng = np.random.default_rng(0)
     done: dict[complex, complex] = {}
@@ -185,20 +198,10 @@ def reduction_estimates(
         P, Z = p.reshape(nh, nr), z.reshape(nh, nr)
         s = complex(x) + 1j * w * H.astype(float)
         total = 0j
-        for a, (name_a, ka, _, _, _) in enumerate(terms):  # the left residual's coefficient
-            for b, (name_b, kb, _, _, _) in enumerate(terms):  # the right residual's
-                # harmonic n of both residuals: z at n + ka, p at n - kb
-                rows = [
-                    (i, pos[int(h) + ka], pos[int(h) - kb])
-                    for i, h in enumerate(H)
-                    if int(h) + ka in pos and int(h) - kb in pos
-                ]
-                if not rows:
-                    continue
-                n_, zi, pi = (np.array(v) for v in zip(*rows, strict=True))
-                coef = _power(name_a, s[n_]) * _power(name_b, s[pi])
-                GP = G[a, b] @ P[pi].T  # nr x rows
-                total += complex(np.sum(coef * np.sum(np.conj(Z[zi]).T * GP, axis=0)))
+        for Gab, name_a, name_b, n_, zi, pi in pairs:
+            coef = _power(name_a, s[n_]) * _power(name_b, s[pi])
+            GP = Gab @ P[pi].T  # nr x rows
+            total += complex(np.sum(coef * np.sum(np.conj(Z[zi]).T * GP, axis=0)))
         out[j] = total / den
         done[complex(x)] = complex(out[j])
     return out

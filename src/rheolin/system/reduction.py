@@ -219,8 +219,8 @@ def _projected(system: PeriodicSystem, T: np.ndarray) -> PeriodicSystem:
 
     def project(x: Any) -> sp.csc_array:
         X = _csc(x)
-        rows = np.unique(X.tocoo().row)
-        cols = np.unique(X.tocoo().col)
+        coo = X.tocoo()
+        rows, cols = np.unique(coo.row), np.unique(coo.col)
         if rows.size == 0:
             return sp.csc_array((T.shape[1], T.shape[1]), dtype=X.dtype)
         # only the rows of T the coefficient touches: a mesh's few DOFs stay a small block
